@@ -1,0 +1,20 @@
+//! kshell: simulation-ready cloth materials from standard fabric lab tests.
+//!
+//! The crate follows the pipeline of Clyde, Teran & Tamstorf, "Modeling and Data-Driven Parameter
+//! Estimation for Woven Fabrics" (SCA 2017), one module per stage:
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`mesh`] | quad control meshes: OBJ input/output, grids, topology checks, uniform Catmull–Clark refinement |
+//! | [`subdiv`] | the exact Catmull–Clark limit basis: per-point stencils for x, x_u, x_v, x_uu, x_uv, x_vv |
+//! | [`quadrature`] | Gauss–Legendre rules on faces and through the thickness |
+//!
+//! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
+//! plain structs of arrays; see `DESIGN.md` in the repository for the map.
+
+pub mod mesh;
+pub mod quadrature;
+pub mod subdiv;
+
+/// A point or vector in 3-space, SI units inside the engine.
+pub type Vec3 = [f64; 3];

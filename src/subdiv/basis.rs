@@ -1,0 +1,163 @@
+//! `LimitBasis`: every Gauss point's stencil and quadrature weight, computed once per mesh.
+//!
+//! This is the hand-off to the shell kinematics: assembly only gathers control points through
+//! these stencils and scatters forces back; no patch type leaks past this module.
+
+use super::surface::{BasisError, BoundaryRule, FaceKind, LimitStencil, LimitSurface};
+use crate::mesh::PolyMesh;
+use crate::quadrature::GaussLegendre;
+use crate::Vec3;
+
+/// Options for building a [`LimitBasis`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BasisOptions {
+    pub boundary: BoundaryRule,
+    /// Gauss points per direction on each face (1 to 8).
+    pub gauss_points: usize,
+}
+
+impl Default for BasisOptions {
+    fn default() -> Self {
+        Self {
+            boundary: BoundaryRule::Phantom,
+            gauss_points: 4,
+        }
+    }
+}
+
+/// Precomputed limit stencils at the Gauss points of every face, stored as flat arrays:
+/// quadrature point q (face `q / points_per_face`) has the stencil rows
+/// `offsets[q]..offsets[q + 1]` of `indices` and `weights`.
+#[derive(Clone, Debug)]
+pub struct LimitBasis {
+    pub options: BasisOptions,
+    /// Control points the stencils index (mesh vertices first, then ghosts).
+    pub control_points: Vec<Vec3>,
+    pub num_mesh_vertices: usize,
+    pub num_faces: usize,
+    pub face_kinds: Vec<FaceKind>,
+    pub points_per_face: usize,
+    /// (u, v) of each point within its face (the same for every face).
+    pub face_uv: Vec<[f64; 2]>,
+    /// Quadrature weight × parametric area of each point (parametric area is 1 per face).
+    pub quad_weight: Vec<f64>,
+    pub offsets: Vec<u32>,
+    pub indices: Vec<u32>,
+    pub weights: Vec<[f64; 6]>,
+}
+
+/// Building a basis failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BasisBuildError {
+    #[error(transparent)]
+    Surface(#[from] BasisError),
+    #[error(transparent)]
+    Quadrature(#[from] crate::quadrature::BadOrder),
+}
+
+impl LimitBasis {
+    /// Builds the basis of a quad mesh.
+    pub fn new(mesh: &PolyMesh, options: BasisOptions) -> Result<Self, BasisBuildError> {
+        let surface = LimitSurface::new(mesh, options.boundary)?;
+        Self::from_surface(&surface, options.gauss_points)
+    }
+
+    /// Builds the basis of an already prepared limit surface.
+    pub fn from_surface(surface: &LimitSurface, gauss_points: usize) -> Result<Self, BasisBuildError> {
+        let rule = GaussLegendre::new(gauss_points)?.on_unit_square();
+        let face_uv: Vec<[f64; 2]> = rule.iter().map(|r| r.0).collect();
+        let nf = surface.num_faces();
+        let npf = face_uv.len();
+        let mut offsets = Vec::with_capacity(nf * npf + 1);
+        let mut indices = Vec::new();
+        let mut weights = Vec::new();
+        let mut quad_weight = Vec::with_capacity(nf * npf);
+        offsets.push(0u32);
+        for face in 0..nf {
+            for (s, (_, w)) in surface.stencils(face, &face_uv)?.into_iter().zip(&rule) {
+                indices.extend_from_slice(&s.indices);
+                weights.extend_from_slice(&s.weights);
+                offsets.push(indices.len() as u32);
+                quad_weight.push(*w);
+            }
+        }
+        Ok(Self {
+            options: BasisOptions {
+                boundary: surface.rule(),
+                gauss_points,
+            },
+            control_points: surface.control_points().to_vec(),
+            num_mesh_vertices: surface.num_mesh_vertices(),
+            num_faces: nf,
+            face_kinds: surface.face_kinds().to_vec(),
+            points_per_face: npf,
+            face_uv,
+            quad_weight,
+            offsets,
+            indices,
+            weights,
+        })
+    }
+
+    /// Number of quadrature points over the whole surface.
+    pub fn num_points(&self) -> usize {
+        self.quad_weight.len()
+    }
+
+    /// Stencil of quadrature point `q`.
+    pub fn stencil(&self, q: usize) -> (&[u32], &[[f64; 6]]) {
+        let r = self.offsets[q] as usize..self.offsets[q + 1] as usize;
+        (&self.indices[r.clone()], &self.weights[r])
+    }
+
+    /// Owned copy of a stencil.
+    pub fn limit_stencil(&self, q: usize) -> LimitStencil {
+        let (i, w) = self.stencil(q);
+        LimitStencil {
+            indices: i.to_vec(),
+            weights: w.to_vec(),
+        }
+    }
+
+    /// Area of the limit surface for control positions `x`: Σ_q w_q |x_u × x_v|.
+    pub fn area(&self, x: &[Vec3]) -> f64 {
+        (0..self.num_points())
+            .map(|q| {
+                let p = self.limit_stencil(q).apply(x);
+                let (a, b) = (p.d[1], p.d[2]);
+                let n = [
+                    a[1] * b[2] - a[2] * b[1],
+                    a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0],
+                ];
+                self.quad_weight[q] * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()
+            })
+            .sum()
+    }
+
+    /// Volume enclosed by a closed limit surface (divergence theorem, (1/3)∫ x·n dA).
+    pub fn enclosed_volume(&self, x: &[Vec3]) -> f64 {
+        (0..self.num_points())
+            .map(|q| {
+                let p = self.limit_stencil(q).apply(x);
+                let (a, b, c) = (p.d[1], p.d[2], p.d[0]);
+                let n = [
+                    a[1] * b[2] - a[2] * b[1],
+                    a[2] * b[0] - a[0] * b[2],
+                    a[0] * b[1] - a[1] * b[0],
+                ];
+                self.quad_weight[q] * (c[0] * n[0] + c[1] * n[1] + c[2] * n[2]) / 3.0
+            })
+            .sum()
+    }
+
+    /// Mean and largest number of control points per stencil.
+    pub fn stencil_sizes(&self) -> (f64, usize) {
+        let n = self.num_points();
+        let max = (0..n)
+            .map(|q| (self.offsets[q + 1] - self.offsets[q]) as usize)
+            .max()
+            .unwrap_or(0);
+        (self.indices.len() as f64 / n.max(1) as f64, max)
+    }
+}

@@ -1,0 +1,541 @@
+//! Exact evaluation of the Catmull–Clark limit surface as stencils over the control points.
+//!
+//! A face whose four corners are regular (interior valence 4, or on the boundary with one or two
+//! faces) is a bicubic uniform B-spline patch over its 4 × 4 one-ring, where missing boundary
+//! rows are phantom points P = 2·(boundary) − (interior) (the B-spline form of the standard
+//! Catmull–Clark boundary rules). Any other face is refined locally: its one-ring is subdivided
+//! symbolically (each point a weight vector over the original one-ring), the quadrant holding the
+//! evaluation point is kept with its new one-ring, and this repeats until the point lies in a
+//! regular sub-patch. That sub-patch's B-spline weights times the composed subdivision matrices
+//! are the exact limit stencil: no end-cap approximation, and each face may hold any number of
+//! extraordinary vertices (each quadrant holds at most one after the first step). A point at
+//! depth d needs d ≈ log₂(1/max(u, v)) steps near the vertex; the 4 × 4 Gauss points need at most
+//! four. Only the extraordinary vertex itself, where the parametric derivatives do not exist, is
+//! refused.
+//!
+//! Parametrisation: on face (c₀, c₁, c₂, c₃), u runs from c₀ to c₁ and v from c₀ to c₃, both in
+//! [0, 1] (the convention of OpenSubdiv and most subdivision libraries).
+
+use super::bspline::bicubic_weights;
+use super::cage::{edge_key, Cage, CageAdjacency};
+use super::ghost::add_ghost_layer;
+use crate::mesh::{PolyMesh, Topology, TopologyError};
+use crate::Vec3;
+use std::collections::{HashMap, HashSet};
+
+/// How the surface is closed off along a free edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BoundaryRule {
+    /// Missing rows are extrapolated, P = 2·boundary − interior. The limit boundary is the cubic
+    /// B-spline of the boundary vertices, with zero curvature across it; corners interpolate.
+    #[default]
+    Phantom,
+    /// A layer of ghost control points outside every boundary edge is added to the unknowns
+    /// (placed where the phantom rule would put them). Boundary faces then see ordinary interior
+    /// stencils, and the ghosts' positions are free to carry a clamp's slope.
+    Ghost,
+}
+
+impl std::str::FromStr for BoundaryRule {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "phantom" => Ok(Self::Phantom),
+            "ghost" => Ok(Self::Ghost),
+            _ => Err(format!("unknown boundary rule '{s}' (expected phantom or ghost)")),
+        }
+    }
+}
+
+/// What kind of patch a face of the user's mesh is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FaceKind {
+    /// Four interior valence-4 corners: one bicubic B-spline patch.
+    Regular,
+    /// Regular corners, some on the boundary (valence 2 or 3 there): a B-spline patch with
+    /// phantom points.
+    Boundary,
+    /// At least one extraordinary corner: exact evaluation by local refinement.
+    Extraordinary,
+}
+
+/// Why a limit evaluation could not be done.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BasisError {
+    #[error("face {face} has {corners} corners; the limit basis needs an all-quad mesh (refine it once first)")]
+    NotQuad { face: usize, corners: usize },
+    #[error("face {face} does not exist: the mesh has {faces} faces (indices start at 0)")]
+    NoSuchFace { face: usize, faces: usize },
+    #[error("(u, v) = ({u}, {v}) lies outside the face's parameter square [0, 1]²")]
+    OutsideFace { u: f64, v: f64 },
+    #[error("(u, v) = ({u}, {v}) on face {face} is (or lies within 1e-18 of) an extraordinary vertex, where the limit surface has no parametric derivatives; evaluate at a nearby point")]
+    AtExtraordinaryVertex { face: usize, u: f64, v: f64 },
+    #[error("{0}")]
+    Topology(#[from] TopologyError),
+}
+
+/// Index of each derivative in a stencil's weight row.
+pub mod deriv {
+    pub const X: usize = 0;
+    pub const XU: usize = 1;
+    pub const XV: usize = 2;
+    pub const XUU: usize = 3;
+    pub const XUV: usize = 4;
+    pub const XVV: usize = 5;
+}
+
+/// The limit surface at one point as weights over control points: row k of `weights` holds, for
+/// control point `indices[k]`, its weight in [x, x_u, x_v, x_uu, x_uv, x_vv]. Because the limit
+/// surface is linear in the control points, these weights are also ∂(x, x_u, …)/∂(control point).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LimitStencil {
+    pub indices: Vec<u32>,
+    pub weights: Vec<[f64; 6]>,
+}
+
+/// Position and parametric derivatives of the limit surface at one point.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LimitPoint {
+    /// [x, x_u, x_v, x_uu, x_uv, x_vv]
+    pub d: [Vec3; 6],
+}
+
+impl LimitPoint {
+    pub fn x(&self) -> Vec3 {
+        self.d[deriv::X]
+    }
+    /// Unit normal x_u × x_v / |x_u × x_v|.
+    pub fn normal(&self) -> Vec3 {
+        let (a, b) = (self.d[deriv::XU], self.d[deriv::XV]);
+        let n = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        [n[0] / l, n[1] / l, n[2] / l]
+    }
+}
+
+impl LimitStencil {
+    /// Applies the stencil to control point positions.
+    pub fn apply(&self, points: &[Vec3]) -> LimitPoint {
+        let mut out = LimitPoint::default();
+        for (&i, w) in self.indices.iter().zip(&self.weights) {
+            let p = points[i as usize];
+            for k in 0..6 {
+                for c in 0..3 {
+                    out.d[k][c] += w[k] * p[c];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Deepest local refinement before a point is declared to sit on an extraordinary vertex.
+const MAX_DEPTH: u32 = 60;
+
+/// The limit surface of a quad control mesh, ready to evaluate anywhere on any face.
+#[derive(Clone, Debug)]
+pub struct LimitSurface {
+    rule: BoundaryRule,
+    cage: PolyMesh,
+    topology: Topology,
+    boundary: HashSet<(u32, u32)>,
+    num_mesh_vertices: usize,
+    num_mesh_faces: usize,
+    kinds: Vec<FaceKind>,
+}
+
+impl LimitSurface {
+    /// Checks the mesh (manifold, all quads) and prepares evaluation under `rule`.
+    pub fn new(mesh: &PolyMesh, rule: BoundaryRule) -> Result<Self, BasisError> {
+        let topo = Topology::build(mesh)?;
+        if let Some((face, f)) = mesh.faces.iter().enumerate().find(|(_, f)| f.len() != 4) {
+            return Err(BasisError::NotQuad {
+                face,
+                corners: f.len(),
+            });
+        }
+        let kinds = classify_faces(mesh, &topo);
+        let (cage, topology) = match rule {
+            BoundaryRule::Phantom => (mesh.clone(), topo),
+            BoundaryRule::Ghost => {
+                let ext = add_ghost_layer(mesh, &topo);
+                let t = Topology::build(&ext)?;
+                (ext, t)
+            }
+        };
+        let boundary = topology
+            .edges
+            .iter()
+            .enumerate()
+            .filter(|&(e, _)| topology.is_boundary_edge(e as u32))
+            .map(|(_, &[a, b])| (a, b))
+            .collect();
+        Ok(Self {
+            rule,
+            cage,
+            topology,
+            boundary,
+            num_mesh_vertices: mesh.num_vertices(),
+            num_mesh_faces: mesh.num_faces(),
+            kinds,
+        })
+    }
+
+    pub fn rule(&self) -> BoundaryRule {
+        self.rule
+    }
+
+    /// Control points the stencils index: the mesh's vertices, then any ghost points.
+    pub fn control_points(&self) -> &[Vec3] {
+        &self.cage.positions
+    }
+
+    /// The control cage the stencils refer to (the mesh, plus the ghost layer under
+    /// [`BoundaryRule::Ghost`], whose faces come after the mesh's own).
+    pub fn cage(&self) -> &PolyMesh {
+        &self.cage
+    }
+
+    pub fn num_mesh_vertices(&self) -> usize {
+        self.num_mesh_vertices
+    }
+
+    /// Faces that carry surface: the mesh's own (ghost faces carry none).
+    pub fn num_faces(&self) -> usize {
+        self.num_mesh_faces
+    }
+
+    pub fn face_kind(&self, face: usize) -> FaceKind {
+        self.kinds[face]
+    }
+
+    pub fn face_kinds(&self) -> &[FaceKind] {
+        &self.kinds
+    }
+
+    /// Stencils at several points of one face (sharing the local refinement work).
+    pub fn stencils(&self, face: usize, uvs: &[[f64; 2]]) -> Result<Vec<LimitStencil>, BasisError> {
+        if face >= self.num_mesh_faces {
+            return Err(BasisError::NoSuchFace {
+                face,
+                faces: self.num_mesh_faces,
+            });
+        }
+        for &[u, v] in uvs {
+            if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+                return Err(BasisError::OutsideFace { u, v });
+            }
+        }
+        let (cage, global) = self.face_cage(face);
+        let pts: Vec<(usize, f64, f64)> = uvs
+            .iter()
+            .enumerate()
+            .map(|(i, &[u, v])| (i, u, v))
+            .collect();
+        let mut dense: Vec<Option<[Vec<f64>; 6]>> = vec![None; uvs.len()];
+        eval_in_cage(&cage, &pts, 0, &mut dense).map_err(|slot| {
+            BasisError::AtExtraordinaryVertex {
+                face,
+                u: uvs[slot][0],
+                v: uvs[slot][1],
+            }
+        })?;
+        Ok(dense
+            .into_iter()
+            .map(|d| sparse_stencil(&d.unwrap_or_default(), &global))
+            .collect())
+    }
+
+    /// The stencil at one point.
+    pub fn stencil(&self, face: usize, u: f64, v: f64) -> Result<LimitStencil, BasisError> {
+        Ok(self.stencils(face, &[[u, v]])?.remove(0))
+    }
+
+    /// Position and derivatives at one point, for the cage's own control points.
+    pub fn evaluate(&self, face: usize, u: f64, v: f64) -> Result<LimitPoint, BasisError> {
+        Ok(self.stencil(face, u, v)?.apply(self.control_points()))
+    }
+
+    /// The cage of every face touching a corner of `face` (face 0 of the result), with each point
+    /// a unit weight vector, and the global index of each local point.
+    fn face_cage(&self, face: usize) -> (Cage<Vec<f64>>, Vec<u32>) {
+        let corners = &self.cage.faces[face];
+        let mut selected = vec![face as u32];
+        for &v in corners {
+            for &f in &self.topology.vertex_faces[v as usize] {
+                if !selected.contains(&f) {
+                    selected.push(f);
+                }
+            }
+        }
+        let mut local: HashMap<u32, u32> = HashMap::new();
+        let mut global = Vec::new();
+        let faces: Vec<Vec<u32>> = selected
+            .iter()
+            .map(|&f| {
+                self.cage.faces[f as usize]
+                    .iter()
+                    .map(|&v| {
+                        *local.entry(v).or_insert_with(|| {
+                            global.push(v);
+                            global.len() as u32 - 1
+                        })
+                    })
+                    .collect()
+            })
+            .collect();
+        let m = global.len();
+        let points = (0..m)
+            .map(|i| {
+                let mut e = vec![0.0; m];
+                e[i] = 1.0;
+                Some(e)
+            })
+            .collect();
+        let complete = global
+            .iter()
+            .map(|&v| {
+                self.topology.vertex_faces[v as usize]
+                    .iter()
+                    .all(|f| selected.contains(f))
+            })
+            .collect();
+        let boundary = self
+            .boundary
+            .iter()
+            .filter_map(|&(a, b)| Some(edge_key(*local.get(&a)?, *local.get(&b)?)))
+            .collect();
+        (
+            Cage {
+                points,
+                faces,
+                complete,
+                boundary,
+            },
+            global,
+        )
+    }
+}
+
+/// Regular / boundary / extraordinary, from the corners' valences.
+fn classify_faces(mesh: &PolyMesh, topo: &Topology) -> Vec<FaceKind> {
+    mesh.faces
+        .iter()
+        .map(|f| {
+            let mut kind = FaceKind::Regular;
+            for &v in f {
+                let v = v as usize;
+                let nf = topo.vertex_faces[v].len();
+                if topo.on_boundary[v] {
+                    if nf > 2 {
+                        return FaceKind::Extraordinary;
+                    }
+                    kind = FaceKind::Boundary;
+                } else if nf != 4 {
+                    return FaceKind::Extraordinary;
+                }
+            }
+            kind
+        })
+        .collect()
+}
+
+/// Dense local weights → sparse stencil over global indices, sorted by index. Only exact zeros
+/// are dropped (they are the structural zeros of the composed subdivision matrices).
+fn sparse_stencil(dense: &[Vec<f64>; 6], global: &[u32]) -> LimitStencil {
+    let mut rows: Vec<(u32, [f64; 6])> = (0..global.len())
+        .filter_map(|i| {
+            let w = std::array::from_fn(|k| dense[k].get(i).copied().unwrap_or(0.0));
+            w.iter().any(|&x| x != 0.0).then_some((global[i], w))
+        })
+        .collect();
+    rows.sort_by_key(|r| r.0);
+    LimitStencil {
+        indices: rows.iter().map(|r| r.0).collect(),
+        weights: rows.iter().map(|r| r.1).collect(),
+    }
+}
+
+/// Corner positions of the face in the 4 × 4 control grid, and the outward step of each side
+/// (side s runs from corner s to corner s+1).
+const POS: [(usize, usize); 4] = [(1, 1), (2, 1), (2, 2), (1, 2)];
+const OUT: [(isize, isize); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
+
+fn step(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
+    (
+        (p.0 as isize + d.0) as usize,
+        (p.1 as isize + d.1) as usize,
+    )
+}
+
+fn back(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
+    step(p, (-d.0, -d.1))
+}
+
+/// `face` rotated so that it starts with the directed edge `a → b`.
+fn starting_with(face: &[u32], a: u32, b: u32) -> Option<[u32; 4]> {
+    if face.len() != 4 {
+        return None;
+    }
+    let k = face.iter().position(|&x| x == a)?;
+    let r: [u32; 4] = std::array::from_fn(|i| face[(k + i) % 4]);
+    (r[1] == b).then_some(r)
+}
+
+/// The 4 × 4 control grid (index `4 j + i`) of face 0 of `cage` if it is a regular (possibly
+/// boundary) B-spline patch whose points are all valid; `None` otherwise.
+fn regular_grid(cage: &Cage<Vec<f64>>, adj: &CageAdjacency) -> Option<Vec<Vec<f64>>> {
+    let f = cage.faces.first()?;
+    if f.len() != 4 {
+        return None;
+    }
+    for &a in f {
+        let a = a as usize;
+        let nf = adj.vertex_faces[a].len();
+        let nb = adj.boundary_edges[a];
+        if !cage.complete[a] || !((nb == 0 && nf == 4) || (nb == 2 && nf <= 2)) {
+            return None;
+        }
+    }
+    let mut id: [[Option<u32>; 4]; 4] = [[None; 4]; 4];
+    for s in 0..4 {
+        id[POS[s].0][POS[s].1] = Some(f[s]);
+    }
+    let mut present = [false; 4];
+    // expected vertex at the side point next to each corner, from the diagonal face's walk
+    let mut expect: Vec<((usize, usize), u32)> = Vec::new();
+    for s in 0..4 {
+        let (a, b) = (f[s], f[(s + 1) % 4]);
+        match adj.directed.get(&(b, a)) {
+            Some(&g) => {
+                let [_, _, x, y] = starting_with(&cage.faces[g as usize], b, a)?;
+                let (px, py) = (step(POS[s], OUT[s]), step(POS[(s + 1) % 4], OUT[s]));
+                id[px.0][px.1] = Some(x);
+                id[py.0][py.1] = Some(y);
+                present[s] = true;
+                if adj.boundary_edges[a as usize] == 0 {
+                    let &h = adj.directed.get(&(x, a))?;
+                    let [_, _, z, w] = starting_with(&cage.faces[h as usize], x, a)?;
+                    let prev = OUT[(s + 3) % 4];
+                    let c = step(step(POS[s], OUT[s]), prev);
+                    id[c.0][c.1] = Some(w);
+                    expect.push((step(POS[s], prev), z));
+                }
+            }
+            None => {
+                if !cage.boundary.contains(&edge_key(a, b)) {
+                    return None;
+                }
+            }
+        }
+    }
+    for (p, z) in expect {
+        if id[p.0][p.1] != Some(z) {
+            return None;
+        }
+    }
+    let mut grid: [[Option<Vec<f64>>; 4]; 4] = Default::default();
+    for i in 0..4 {
+        for j in 0..4 {
+            if let Some(v) = id[i][j] {
+                grid[i][j] = Some(cage.points[v as usize].clone()?);
+            }
+        }
+    }
+    let mirror = |grid: &[[Option<Vec<f64>>; 4]; 4], at: (usize, usize), d: (isize, isize)| {
+        // phantom at `at + d` = 2·at − (at − d)
+        let p = grid[at.0][at.1].as_ref()?;
+        let q = grid[back(at, d).0][back(at, d).1].as_ref()?;
+        Some(p.iter().zip(q).map(|(p, q)| 2.0 * p - q).collect::<Vec<f64>>())
+    };
+    for s in 0..4 {
+        if !present[s] {
+            for corner in [POS[s], POS[(s + 1) % 4]] {
+                let t = step(corner, OUT[s]);
+                grid[t.0][t.1] = Some(mirror(&grid, corner, OUT[s])?);
+            }
+        }
+    }
+    for s in 0..4 {
+        let prev = (s + 3) % 4;
+        let c = step(step(POS[s], OUT[s]), OUT[prev]);
+        if grid[c.0][c.1].is_some() {
+            continue;
+        }
+        let p = if !present[s] {
+            mirror(&grid, step(POS[s], OUT[prev]), OUT[s])?
+        } else if !present[prev] {
+            mirror(&grid, step(POS[s], OUT[s]), OUT[prev])?
+        } else {
+            return None;
+        };
+        grid[c.0][c.1] = Some(p);
+    }
+    let mut out = Vec::with_capacity(16);
+    for j in 0..4 {
+        for row in &grid {
+            out.push(row[j].clone()?);
+        }
+    }
+    Some(out)
+}
+
+/// Evaluates the points `(slot, u, v)` of face 0 of `cage` at refinement depth `depth`, writing
+/// dense weights into `out[slot]`. On failure returns the slot of a point that reached
+/// `MAX_DEPTH` (it sits on an extraordinary vertex).
+fn eval_in_cage(
+    cage: &Cage<Vec<f64>>,
+    pts: &[(usize, f64, f64)],
+    depth: u32,
+    out: &mut [Option<[Vec<f64>; 6]>],
+) -> Result<(), usize> {
+    let adj = cage.adjacency();
+    if let Some(grid) = regular_grid(cage, &adj) {
+        let m = grid[0].len();
+        let scale = (depth as f64).exp2();
+        for &(slot, u, v) in pts {
+            let w = bicubic_weights(u, v, scale);
+            out[slot] = Some(std::array::from_fn(|k| {
+                let mut acc = vec![0.0; m];
+                for (c, row) in grid.iter().enumerate() {
+                    let a = w[k][c];
+                    if a != 0.0 {
+                        for (s, x) in acc.iter_mut().zip(row) {
+                            *s += a * x;
+                        }
+                    }
+                }
+                acc
+            }));
+        }
+        return Ok(());
+    }
+    if depth >= MAX_DEPTH {
+        return Err(pts[0].0);
+    }
+    let fine = cage.refine();
+    let fine_adj = fine.adjacency();
+    // quadrant k of the parent holds child face k (child of corner k); (i, j) is its offset
+    for (k, (i, j)) in [(0usize, 0usize), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
+        let sub: Vec<(usize, f64, f64)> = pts
+            .iter()
+            .filter(|&&(_, u, v)| (u >= 0.5) as usize == i && (v >= 0.5) as usize == j)
+            .map(|&(slot, u, v)| (slot, 2.0 * u - i as f64, 2.0 * v - j as f64))
+            .collect();
+        if sub.is_empty() {
+            continue;
+        }
+        // child k is [vertex(c_k), edge, face, edge]; rotate it so that its u, v axes run
+        // along the parent's
+        let child = &fine.faces[k];
+        let rot = (4 - k) % 4;
+        let aligned: Vec<u32> = (0..4).map(|r| child[(rot + r) % 4]).collect();
+        let next = fine.one_ring(&fine_adj, k, &aligned);
+        eval_in_cage(&next, &sub, depth + 1, out)?;
+    }
+    Ok(())
+}
