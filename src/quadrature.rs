@@ -108,18 +108,29 @@ mod tests {
         for n in 1..=MAX_POINTS {
             let g = GaussLegendre::new(n).unwrap();
             for deg in 0..2 * n {
-                let q: f64 = g.on_interval(0.0, 1.0).iter().map(|&(x, w)| w * x.powi(deg as i32)).sum();
+                let q: f64 = g
+                    .on_interval(0.0, 1.0)
+                    .iter()
+                    .map(|&(x, w)| w * x.powi(deg as i32))
+                    .sum();
                 let exact = 1.0 / (deg as f64 + 1.0);
                 assert!((q - exact).abs() < 1e-14, "n={n} deg={deg}: {q} vs {exact}");
             }
             // Degree 2n is not exact, and its error is the textbook one (Abramowitz & Stegun
             // 25.4.30 on [0, 1] with f = x^2n): (n!)⁴ / ((2n + 1) ((2n)!)²).
             let deg = 2 * n;
-            let q: f64 = g.on_interval(0.0, 1.0).iter().map(|&(x, w)| w * x.powi(deg as i32)).sum();
+            let q: f64 = g
+                .on_interval(0.0, 1.0)
+                .iter()
+                .map(|&(x, w)| w * x.powi(deg as i32))
+                .sum();
             let fact = |k: usize| (1..=k).map(|i| i as f64).product::<f64>();
             let predicted = fact(n).powi(4) / ((deg as f64 + 1.0) * fact(deg).powi(2));
             let err = 1.0 / (deg as f64 + 1.0) - q;
-            assert!((err / predicted - 1.0).abs() < 1e-5, "n={n}: {err} vs {predicted}");
+            assert!(
+                (err / predicted - 1.0).abs() < 1e-5,
+                "n={n}: {err} vs {predicted}"
+            );
         }
     }
 
@@ -147,7 +158,11 @@ mod tests {
         assert!((m - 1.0 / 12.0).abs() < 1e-15);
         // ∫ ξ² dξ over [−τ/2, τ/2] = τ³/12 (the bending moment of inertia)
         let tau = 1.8e-4;
-        let i2: f64 = g.through_thickness(tau).iter().map(|(x, w)| w * x * x).sum();
+        let i2: f64 = g
+            .through_thickness(tau)
+            .iter()
+            .map(|(x, w)| w * x * x)
+            .sum();
         assert!((i2 / (tau.powi(3) / 12.0) - 1.0).abs() < 1e-13);
         assert_eq!(GaussLegendre::new(0), Err(BadOrder(0)));
         assert_eq!(GaussLegendre::new(9), Err(BadOrder(9)));

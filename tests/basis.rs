@@ -78,7 +78,11 @@ fn partition_of_unity_on_every_face_kind() {
             }
         }
     }
-    assert_eq!(kinds_seen.len(), 3, "regular, boundary and extraordinary faces all tested");
+    assert_eq!(
+        kinds_seen.len(),
+        3,
+        "regular, boundary and extraordinary faces all tested"
+    );
 }
 
 #[test]
@@ -107,7 +111,10 @@ fn planar_grid_reproduces_the_affine_map() {
                 assert!(dist(p.d[1], xu) < 1e-13, "{rule:?} face {face}: x_u");
                 assert!(dist(p.d[2], xv) < 1e-13, "{rule:?} face {face}: x_v");
                 for k in 3..6 {
-                    assert!(norm(p.d[k]) < 1e-12, "{rule:?} face {face}: second derivative {k}");
+                    assert!(
+                        norm(p.d[k]) < 1e-12,
+                        "{rule:?} face {face}: second derivative {k}"
+                    );
                 }
             }
         }
@@ -129,11 +136,12 @@ fn check_fd(s: &LimitSurface, face: usize, u: f64, v: f64, what: &str) {
         at(u, v + 2.0 * h),
         at(u, v - 2.0 * h),
     );
-    let d4 = |k: usize, p2: &LimitPoint, p1: &LimitPoint, m1: &LimitPoint, m2: &LimitPoint| -> Vec3 {
-        std::array::from_fn(|c| {
-            (-p2.d[k][c] + 8.0 * p1.d[k][c] - 8.0 * m1.d[k][c] + m2.d[k][c]) / (12.0 * h)
-        })
-    };
+    let d4 =
+        |k: usize, p2: &LimitPoint, p1: &LimitPoint, m1: &LimitPoint, m2: &LimitPoint| -> Vec3 {
+            std::array::from_fn(|c| {
+                (-p2.d[k][c] + 8.0 * p1.d[k][c] - 8.0 * m1.d[k][c] + m2.d[k][c]) / (12.0 * h)
+            })
+        };
     let cd_u = |k: usize| d4(k, &pu2, &pu, &mu, &mu2);
     let cd_v = |k: usize| d4(k, &pv2, &pv, &mv, &mv2);
     // scale of first and second derivatives on this face, for a relative measure
@@ -149,7 +157,10 @@ fn check_fd(s: &LimitSurface, face: usize, u: f64, v: f64, what: &str) {
     ];
     for (name, fd, exact, scale) in checks {
         let err = dist(fd, exact) / scale;
-        assert!(err <= 1e-6, "{what} face {face} ({u:.3},{v:.3}) {name}: relative error {err:.2e}");
+        assert!(
+            err <= 1e-6,
+            "{what} face {face} ({u:.3},{v:.3}) {name}: relative error {err:.2e}"
+        );
     }
 }
 
@@ -167,7 +178,13 @@ fn derivatives_agree_with_finite_differences() {
                     check_fd(&s, face, u, v, &format!("{name} {rule:?}"));
                 }
                 // and right next to a corner, deep in the local refinement
-                check_fd(&s, face, 0.003, 0.0021, &format!("{name} {rule:?} near corner"));
+                check_fd(
+                    &s,
+                    face,
+                    0.003,
+                    0.0021,
+                    &format!("{name} {rule:?} near corner"),
+                );
             }
         }
     }
@@ -267,7 +284,10 @@ fn vertex_at(levels: &[PolyMesh], face: usize, u: f64, v: f64) -> usize {
     let mut f = face;
     let (mut u, mut v) = (u, v);
     for lvl in 0..levels.len() {
-        for (k, &(cu, cv)) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].iter().enumerate() {
+        for (k, &(cu, cv)) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .iter()
+            .enumerate()
+        {
             if u == cu && v == cv {
                 return corners[k] as usize;
             }
@@ -303,7 +323,13 @@ fn limit_masks_on_refined_cages_match_the_basis_exactly() {
         let fine = levels.last().unwrap();
         let fine_topo = Topology::build(fine).unwrap();
         for face in 0..mesh.num_faces() {
-            for (u, v) in [(0.125, 0.125), (0.5, 0.25), (0.875, 0.625), (0.375, 1.0), (1.0, 0.5)] {
+            for (u, v) in [
+                (0.125, 0.125),
+                (0.5, 0.25),
+                (0.875, 0.625),
+                (0.375, 1.0),
+                (1.0, 0.5),
+            ] {
                 let vx = vertex_at(&levels, face, u, v);
                 let want = limit_point_mask(fine, &fine_topo, vx);
                 let got = s.evaluate(face, u, v).unwrap().x();
@@ -330,7 +356,12 @@ fn uniform_subdivision_converges_to_the_basis_at_second_order() {
         let (face, u, v) = (mesh.num_faces() / 2, 0.5, 0.5);
         let limit = s.evaluate(face, u, v).unwrap().x();
         let errs: Vec<f64> = (1..levels.len())
-            .map(|k| dist(levels[k].positions[vertex_at(&levels[..=k], face, u, v)], limit))
+            .map(|k| {
+                dist(
+                    levels[k].positions[vertex_at(&levels[..=k], face, u, v)],
+                    limit,
+                )
+            })
             .collect();
         for w in errs.windows(2).skip(1) {
             let ratio = w[0] / w[1];
@@ -359,7 +390,10 @@ fn refining_the_cage_does_not_change_the_limit_surface() {
             assert!(dist(p0.x(), p1.x()) < 1e-13, "{name} face {face}");
             for k in 1..3 {
                 let scaled: Vec3 = std::array::from_fn(|c| 0.5 * p0.d[k][c]);
-                assert!(dist(scaled, p1.d[k]) < 1e-12, "{name} face {face} derivative {k}");
+                assert!(
+                    dist(scaled, p1.d[k]) < 1e-12,
+                    "{name} face {face} derivative {k}"
+                );
             }
         }
     }
@@ -369,12 +403,20 @@ fn refining_the_cage_does_not_change_the_limit_surface() {
 fn non_quad_cages_become_quads_after_one_step() {
     // a tetrahedron and a pentagon-capped prism: triangles and n-gons
     let tet = PolyMesh::new(
-        vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
         vec![vec![0, 2, 1], vec![0, 1, 3], vec![1, 2, 3], vec![2, 0, 3]],
     );
     assert_eq!(
         LimitSurface::new(&tet, BoundaryRule::Phantom).unwrap_err(),
-        BasisError::NotQuad { face: 0, corners: 3 }
+        BasisError::NotQuad {
+            face: 0,
+            corners: 3
+        }
     );
     let quads = refine_uniform(&tet, &Topology::build(&tet).unwrap());
     assert!(quads.is_all_quads());
@@ -398,8 +440,10 @@ fn ghost_rule_starts_on_the_phantom_surface_where_both_are_regular() {
     assert_eq!(b.control_points().len(), 20 + 10 + 12);
     for face in 0..mesh.num_faces() {
         for (u, v) in [(0.0, 0.0), (0.2, 0.9), (1.0, 0.5)] {
-            let (p, q): (LimitPoint, LimitPoint) =
-                (a.evaluate(face, u, v).unwrap(), b.evaluate(face, u, v).unwrap());
+            let (p, q): (LimitPoint, LimitPoint) = (
+                a.evaluate(face, u, v).unwrap(),
+                b.evaluate(face, u, v).unwrap(),
+            );
             for k in 0..6 {
                 assert!(dist(p.d[k], q.d[k]) < 1e-12, "face {face} ({u},{v}) d{k}");
             }
@@ -413,10 +457,19 @@ fn extraordinary_vertex_itself_is_refused_with_a_clear_error() {
     // face 0 has the centre at its corner 0
     assert_eq!(s.face_kind(0), FaceKind::Extraordinary);
     let e = s.evaluate(0, 0.0, 0.0).unwrap_err();
-    assert!(matches!(e, BasisError::AtExtraordinaryVertex { face: 0, .. }), "{e}");
+    assert!(
+        matches!(e, BasisError::AtExtraordinaryVertex { face: 0, .. }),
+        "{e}"
+    );
     assert!(s.evaluate(0, 1e-9, 1e-9).is_ok());
-    assert!(matches!(s.evaluate(0, 1.5, 0.0), Err(BasisError::OutsideFace { .. })));
-    assert!(matches!(s.evaluate(99, 0.5, 0.5), Err(BasisError::NoSuchFace { .. })));
+    assert!(matches!(
+        s.evaluate(0, 1.5, 0.0),
+        Err(BasisError::OutsideFace { .. })
+    ));
+    assert!(matches!(
+        s.evaluate(99, 0.5, 0.5),
+        Err(BasisError::NoSuchFace { .. })
+    ));
 }
 
 #[test]

@@ -103,14 +103,20 @@ impl Topology {
             if face.len() < 3 {
                 return Err(TopologyError::at(
                     fi,
-                    format!("face {fi} has {} corners; a face needs at least 3", face.len()),
+                    format!(
+                        "face {fi} has {} corners; a face needs at least 3",
+                        face.len()
+                    ),
                 ));
             }
             for (k, &v) in face.iter().enumerate() {
                 if v as usize >= nv {
                     return Err(TopologyError::at(
                         fi,
-                        format!("face {fi} uses vertex {} but the mesh has {nv} vertices", v + 1),
+                        format!(
+                            "face {fi} uses vertex {} but the mesh has {nv} vertices",
+                            v + 1
+                        ),
                     ));
                 }
                 if face[..k].contains(&v) {
@@ -150,7 +156,11 @@ impl Topology {
                         if slot[0] == fi as u32 {
                             return Err(TopologyError::at(
                                 fi,
-                                format!("face {fi} uses the edge {}-{} twice", key.0 + 1, key.1 + 1),
+                                format!(
+                                    "face {fi} uses the edge {}-{} twice",
+                                    key.0 + 1,
+                                    key.1 + 1
+                                ),
                             ));
                         }
                         if first_dir[e as usize] == forward {

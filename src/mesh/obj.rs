@@ -87,7 +87,10 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                     } else if n < 0 {
                         count + n
                     } else {
-                        return Err(err(lineno, "vertex index 0 (OBJ indices start at 1)".into()));
+                        return Err(err(
+                            lineno,
+                            "vertex index 0 (OBJ indices start at 1)".into(),
+                        ));
                     };
                     if resolved < 0 || resolved >= count {
                         return Err(err(
@@ -172,7 +175,10 @@ mod tests {
     fn errors_name_file_and_line() {
         let cases = [
             ("v 0 0 0\nv 1 x 0\n", "t.obj:2: bad vertex coordinate 'x'"),
-            ("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n", "t.obj:4: vertex index 7 out of range"),
+            (
+                "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n",
+                "t.obj:4: vertex index 7 out of range",
+            ),
             ("", "t.obj: empty mesh"),
             ("v 0 0 0\n", "t.obj: no faces"),
             ("v 0 0 0\nv 1 0 0\nf 1 2\n", "t.obj:3: face has 2 vertices"),

@@ -137,7 +137,9 @@ mod tests {
 
     fn valences(m: &PolyMesh) -> Vec<(u32, bool)> {
         let t = Topology::build(m).unwrap();
-        (0..m.num_vertices()).map(|v| (t.valence[v], t.on_boundary[v])).collect()
+        (0..m.num_vertices())
+            .map(|v| (t.valence[v], t.on_boundary[v]))
+            .collect()
     }
 
     #[test]

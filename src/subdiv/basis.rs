@@ -63,7 +63,10 @@ impl LimitBasis {
     }
 
     /// Builds the basis of an already prepared limit surface.
-    pub fn from_surface(surface: &LimitSurface, gauss_points: usize) -> Result<Self, BasisBuildError> {
+    pub fn from_surface(
+        surface: &LimitSurface,
+        gauss_points: usize,
+    ) -> Result<Self, BasisBuildError> {
         let rule = GaussLegendre::new(gauss_points)?.on_unit_square();
         let face_uv: Vec<[f64; 2]> = rule.iter().map(|r| r.0).collect();
         let nf = surface.num_faces();

@@ -232,9 +232,8 @@ impl<T: Affine> Cage<T> {
         }
 
         let mut complete = self.complete.clone();
-        complete.extend((0..ne).map(|e| {
-            edge_faces[e].len() == 2 || self.boundary.contains(&edges[e])
-        }));
+        complete
+            .extend((0..ne).map(|e| edge_faces[e].len() == 2 || self.boundary.contains(&edges[e])));
         complete.extend(std::iter::repeat_n(true, self.faces.len()));
 
         let mut boundary = HashSet::new();
@@ -272,7 +271,11 @@ impl<T: Affine> Cage<T> {
         let mut global = Vec::new();
         let mut faces = Vec::with_capacity(selected.len());
         for (i, &f) in selected.iter().enumerate() {
-            let src: &[u32] = if i == 0 { face } else { &self.faces[f as usize] };
+            let src: &[u32] = if i == 0 {
+                face
+            } else {
+                &self.faces[f as usize]
+            };
             faces.push(
                 src.iter()
                     .map(|&v| {

@@ -82,7 +82,11 @@ pub(crate) fn add_ghost_layer(mesh: &PolyMesh, topo: &Topology) -> PolyMesh {
         let f = &mesh.faces[topo.edge_faces[e][0] as usize];
         let k = f.iter().position(|&x| x == p).unwrap_or(0);
         // direction a -> b as the face runs along the edge
-        let (a, b) = if f[(k + 1) % f.len()] == q { (p, q) } else { (q, p) };
+        let (a, b) = if f[(k + 1) % f.len()] == q {
+            (p, q)
+        } else {
+            (q, p)
+        };
         faces.push(vec![b, a, ghost(a, b), ghost(b, a)]);
     }
     PolyMesh::new(positions, faces)

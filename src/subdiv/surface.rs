@@ -42,7 +42,9 @@ impl std::str::FromStr for BoundaryRule {
         match s {
             "phantom" => Ok(Self::Phantom),
             "ghost" => Ok(Self::Ghost),
-            _ => Err(format!("unknown boundary rule '{s}' (expected phantom or ghost)")),
+            _ => Err(format!(
+                "unknown boundary rule '{s}' (expected phantom or ghost)"
+            )),
         }
     }
 }
@@ -366,10 +368,7 @@ const POS: [(usize, usize); 4] = [(1, 1), (2, 1), (2, 2), (1, 2)];
 const OUT: [(isize, isize); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
 
 fn step(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
-    (
-        (p.0 as isize + d.0) as usize,
-        (p.1 as isize + d.1) as usize,
-    )
+    ((p.0 as isize + d.0) as usize, (p.1 as isize + d.1) as usize)
 }
 
 fn back(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
@@ -450,7 +449,12 @@ fn regular_grid(cage: &Cage<Vec<f64>>, adj: &CageAdjacency) -> Option<Vec<Vec<f6
         // phantom at `at + d` = 2·at − (at − d)
         let p = grid[at.0][at.1].as_ref()?;
         let q = grid[back(at, d).0][back(at, d).1].as_ref()?;
-        Some(p.iter().zip(q).map(|(p, q)| 2.0 * p - q).collect::<Vec<f64>>())
+        Some(
+            p.iter()
+                .zip(q)
+                .map(|(p, q)| 2.0 * p - q)
+                .collect::<Vec<f64>>(),
+        )
     };
     for s in 0..4 {
         if !present[s] {
@@ -520,7 +524,10 @@ fn eval_in_cage(
     let fine = cage.refine();
     let fine_adj = fine.adjacency();
     // quadrant k of the parent holds child face k (child of corner k); (i, j) is its offset
-    for (k, (i, j)) in [(0usize, 0usize), (1, 0), (1, 1), (0, 1)].into_iter().enumerate() {
+    for (k, (i, j)) in [(0usize, 0usize), (1, 0), (1, 1), (0, 1)]
+        .into_iter()
+        .enumerate()
+    {
         let sub: Vec<(usize, f64, f64)> = pts
             .iter()
             .filter(|&&(_, u, v)| (u >= 0.5) as usize == i && (v >= 0.5) as usize == j)
