@@ -1,0 +1,130 @@
+//! End-to-end tests of the `ks-fit` command line: outputs users and scripts rely on, and errors
+//! that name the file and line and exit with code 2.
+
+use std::process::Command;
+
+fn ks_fit(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run ks-fit");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn temp_file(name: &str, text: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("kshell-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn mesh_summary_of_the_shipped_samples() {
+    let (rc, out, _) = ks_fit(&["mesh", "meshes/cube.obj"]);
+    assert_eq!(rc, 0);
+    for line in [
+        "vertices: 8",
+        "faces: 6",
+        "boundary edges: 0",
+        "faces by kind: regular 0, boundary 0, extraordinary 6",
+        "valences present: interior 3 (8); boundary none",
+    ] {
+        assert!(out.contains(line), "missing {line:?} in\n{out}");
+    }
+    let (rc, out, _) = ks_fit(&["mesh", "meshes/strip_8x12.obj"]);
+    assert_eq!(rc, 0);
+    assert!(out.contains("faces by kind: regular 60, boundary 36, extraordinary 0"), "{out}");
+    assert!(out.contains("boundary edges: 40"), "{out}");
+    let (rc, out, _) = ks_fit(&["mesh", "meshes/fan4_boundary.obj"]);
+    assert_eq!(rc, 0);
+    assert!(out.contains("boundary 2 (6), 3 (23), 5 (1)"), "{out}");
+}
+
+#[test]
+fn limit_prints_one_csv_row_with_the_documented_header() {
+    let (rc, out, err) = ks_fit(&["mesh", "meshes/strip_8x12.obj", "--limit", "9", "0.5", "0.25"]);
+    assert_eq!(rc, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "x,y,z,xu,yu,zu,xv,yv,zv,xuu,yuu,zuu,xuv,yuv,zuv,xvv,yvv,zvv");
+    assert_eq!(lines.len(), 2);
+    let v: Vec<f64> = lines[1].split(',').map(|x| x.parse().unwrap()).collect();
+    assert_eq!(v.len(), 18);
+    // face 9 of the 8 × 12 strip is face (1, 1): x = (1 + u)·6.25 mm, y = (1 + v)·6.25 mm
+    let expect = [0.009375, 0.0078125, 0.0, 0.00625, 0.0, 0.0, 0.0, 0.00625, 0.0];
+    for (a, b) in v.iter().zip(expect) {
+        assert!((a - b).abs() < 1e-15, "{v:?}");
+    }
+    assert!(v[9..].iter().all(|x| x.abs() < 1e-14));
+}
+
+#[test]
+fn triangle_meshes_are_refined_once_with_a_note() {
+    let (rc, out, _) = ks_fit(&["mesh", "meshes/tetra.obj"]);
+    assert_eq!(rc, 0);
+    assert!(out.contains("one Catmull–Clark step"), "{out}");
+    assert!(out.contains("faces: 12"), "{out}");
+}
+
+#[test]
+fn bad_input_is_one_line_naming_file_and_line_with_exit_code_2() {
+    let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+    let cases = [
+        (temp_file("badnum.obj", "v 0 0 0\nv 1 zero 0\n"), ":2: bad vertex coordinate 'zero'"),
+        (temp_file("range.obj", &format!("{quad}f 1 2 3 5\n")), ":5: vertex index 5 out of range"),
+        (
+            temp_file(
+                "nonmanifold.obj",
+                &format!("{quad}v 0 0 1\nv 0 0 -1\nf 1 2 3 4\nf 2 1 5\nf 1 2 6\n"),
+            ),
+            ":9: non-manifold edge",
+        ),
+        (temp_file("empty.obj", ""), ": empty mesh"),
+        ("does/not/exist.obj".to_string(), "does/not/exist.obj: cannot read file"),
+    ];
+    for (path, want) in cases {
+        let (rc, out, err) = ks_fit(&["mesh", &path]);
+        assert_eq!(rc, 2, "{path}: {err}");
+        assert!(out.is_empty());
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(&path) && err.contains(want), "{err:?} should name {path} and say {want:?}");
+        assert!(!err.contains("panicked"));
+    }
+    for args in [
+        ["mesh", "meshes/cube.obj", "--limit", "6", "0.5", "0.5"],
+        ["mesh", "meshes/cube.obj", "--limit", "0", "1.5", "0.5"],
+        ["mesh", "meshes/cube.obj", "--limit", "0", "nan", "0.5"],
+        ["mesh", "meshes/cube.obj", "--limit", "0", "0", "0"],
+        ["mesh", "meshes/cube.obj", "--limit", "x", "0", "0"],
+    ] {
+        let (rc, _, err) = ks_fit(&args);
+        assert_eq!(rc, 2, "{args:?}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.starts_with("ks-fit: error:"), "{err}");
+    }
+}
+
+#[test]
+fn shipped_meshes_match_their_generators() {
+    // `cargo run --example sample_meshes` writes them; this catches drift either way.
+    use kshell::mesh::{read_obj, shapes};
+    let cube = read_obj("meshes/cube.obj".as_ref()).unwrap();
+    assert_eq!(cube.mesh, shapes::cube());
+    let star = read_obj("meshes/star5.obj".as_ref()).unwrap();
+    assert_eq!(star.mesh, shapes::star(5, 3));
+    let l = read_obj("meshes/l_shape.obj".as_ref()).unwrap();
+    assert_eq!(l.mesh, shapes::l_shape(3));
+}
+
+#[test]
+fn demo_runs_and_checks_the_strip_area() {
+    let (rc, out, err) = ks_fit(&["demo"]);
+    assert_eq!(rc, 0, "{err}");
+    assert!(out.contains("strip 50x75 mm"), "{out}");
+    assert!(out.contains("relative error"), "{out}");
+}
