@@ -15,6 +15,7 @@ mod basis;
 pub mod bspline;
 mod cage;
 mod ghost;
+mod patch;
 mod surface;
 
 pub use basis::{BasisBuildError, BasisOptions, LimitBasis};

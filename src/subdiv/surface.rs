@@ -19,6 +19,7 @@
 use super::bspline::bicubic_weights;
 use super::cage::{edge_key, Cage, CageAdjacency};
 use super::ghost::add_ghost_layer;
+use super::patch::{regular_patch, Neighbourhood, Recipe};
 use crate::mesh::{PolyMesh, Topology, TopologyError};
 use crate::Vec3;
 use std::collections::{HashMap, HashSet};
@@ -148,6 +149,8 @@ pub struct LimitSurface {
     num_mesh_vertices: usize,
     num_mesh_faces: usize,
     kinds: Vec<FaceKind>,
+    /// Control grid of each regular face of the mesh (`None`: evaluate by local refinement).
+    patches: Vec<Option<[Recipe; 16]>>,
 }
 
 impl LimitSurface {
@@ -176,6 +179,17 @@ impl LimitSurface {
             .filter(|&(e, _)| topology.is_boundary_edge(e as u32))
             .map(|(_, &[a, b])| (a, b))
             .collect();
+        let patches = (0..mesh.num_faces() as u32)
+            .map(|f| {
+                regular_patch(
+                    &MeshView {
+                        mesh: &cage,
+                        topo: &topology,
+                    },
+                    f,
+                )
+            })
+            .collect();
         Ok(Self {
             rule,
             cage,
@@ -184,6 +198,7 @@ impl LimitSurface {
             num_mesh_vertices: mesh.num_vertices(),
             num_mesh_faces: mesh.num_faces(),
             kinds,
+            patches,
         })
     }
 
@@ -231,6 +246,9 @@ impl LimitSurface {
             if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
                 return Err(BasisError::OutsideFace { u, v });
             }
+        }
+        if let Some(patch) = &self.patches[face] {
+            return Ok(patch_stencils(patch, uvs));
         }
         let (cage, global) = self.face_cage(face);
         let pts: Vec<(usize, f64, f64)> = uvs
@@ -362,130 +380,119 @@ fn sparse_stencil(dense: &[Vec<f64>; 6], global: &[u32]) -> LimitStencil {
     }
 }
 
-/// Corner positions of the face in the 4 × 4 control grid, and the outward step of each side
-/// (side s runs from corner s to corner s+1).
-const POS: [(usize, usize); 4] = [(1, 1), (2, 1), (2, 2), (1, 2)];
-const OUT: [(isize, isize); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
-
-fn step(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
-    ((p.0 as isize + d.0) as usize, (p.1 as isize + d.1) as usize)
+/// A local cage seen through [`Neighbourhood`].
+struct CageView<'a> {
+    cage: &'a Cage<Vec<f64>>,
+    adj: &'a CageAdjacency,
 }
 
-fn back(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
-    step(p, (-d.0, -d.1))
-}
-
-/// `face` rotated so that it starts with the directed edge `a → b`.
-fn starting_with(face: &[u32], a: u32, b: u32) -> Option<[u32; 4]> {
-    if face.len() != 4 {
-        return None;
+impl Neighbourhood for CageView<'_> {
+    fn face(&self, f: u32) -> &[u32] {
+        &self.cage.faces[f as usize]
     }
-    let k = face.iter().position(|&x| x == a)?;
-    let r: [u32; 4] = std::array::from_fn(|i| face[(k + i) % 4]);
-    (r[1] == b).then_some(r)
-}
-
-/// The 4 × 4 control grid (index `4 j + i`) of face 0 of `cage` if it is a regular (possibly
-/// boundary) B-spline patch whose points are all valid; `None` otherwise.
-fn regular_grid(cage: &Cage<Vec<f64>>, adj: &CageAdjacency) -> Option<Vec<Vec<f64>>> {
-    let f = cage.faces.first()?;
-    if f.len() != 4 {
-        return None;
+    fn face_along(&self, a: u32, b: u32) -> Option<u32> {
+        self.adj.directed.get(&(a, b)).copied()
     }
-    for &a in f {
-        let a = a as usize;
-        let nf = adj.vertex_faces[a].len();
-        let nb = adj.boundary_edges[a];
-        if !cage.complete[a] || !((nb == 0 && nf == 4) || (nb == 2 && nf <= 2)) {
-            return None;
-        }
-    }
-    let mut id: [[Option<u32>; 4]; 4] = [[None; 4]; 4];
-    for s in 0..4 {
-        id[POS[s].0][POS[s].1] = Some(f[s]);
-    }
-    let mut present = [false; 4];
-    // expected vertex at the side point next to each corner, from the diagonal face's walk
-    let mut expect: Vec<((usize, usize), u32)> = Vec::new();
-    for s in 0..4 {
-        let (a, b) = (f[s], f[(s + 1) % 4]);
-        match adj.directed.get(&(b, a)) {
-            Some(&g) => {
-                let [_, _, x, y] = starting_with(&cage.faces[g as usize], b, a)?;
-                let (px, py) = (step(POS[s], OUT[s]), step(POS[(s + 1) % 4], OUT[s]));
-                id[px.0][px.1] = Some(x);
-                id[py.0][py.1] = Some(y);
-                present[s] = true;
-                if adj.boundary_edges[a as usize] == 0 {
-                    let &h = adj.directed.get(&(x, a))?;
-                    let [_, _, z, w] = starting_with(&cage.faces[h as usize], x, a)?;
-                    let prev = OUT[(s + 3) % 4];
-                    let c = step(step(POS[s], OUT[s]), prev);
-                    id[c.0][c.1] = Some(w);
-                    expect.push((step(POS[s], prev), z));
-                }
-            }
-            None => {
-                if !cage.boundary.contains(&edge_key(a, b)) {
-                    return None;
-                }
-            }
-        }
-    }
-    for (p, z) in expect {
-        if id[p.0][p.1] != Some(z) {
-            return None;
-        }
-    }
-    let mut grid: [[Option<Vec<f64>>; 4]; 4] = Default::default();
-    for i in 0..4 {
-        for j in 0..4 {
-            if let Some(v) = id[i][j] {
-                grid[i][j] = Some(cage.points[v as usize].clone()?);
-            }
-        }
-    }
-    let mirror = |grid: &[[Option<Vec<f64>>; 4]; 4], at: (usize, usize), d: (isize, isize)| {
-        // phantom at `at + d` = 2·at − (at − d)
-        let p = grid[at.0][at.1].as_ref()?;
-        let q = grid[back(at, d).0][back(at, d).1].as_ref()?;
-        Some(
-            p.iter()
-                .zip(q)
-                .map(|(p, q)| 2.0 * p - q)
-                .collect::<Vec<f64>>(),
+    fn vertex_faces(&self, v: u32) -> (usize, bool) {
+        (
+            self.adj.vertex_faces[v as usize].len(),
+            self.cage.complete[v as usize],
         )
-    };
-    for s in 0..4 {
-        if !present[s] {
-            for corner in [POS[s], POS[(s + 1) % 4]] {
-                let t = step(corner, OUT[s]);
-                grid[t.0][t.1] = Some(mirror(&grid, corner, OUT[s])?);
-            }
-        }
     }
-    for s in 0..4 {
-        let prev = (s + 3) % 4;
-        let c = step(step(POS[s], OUT[s]), OUT[prev]);
-        if grid[c.0][c.1].is_some() {
-            continue;
-        }
-        let p = if !present[s] {
-            mirror(&grid, step(POS[s], OUT[prev]), OUT[s])?
-        } else if !present[prev] {
-            mirror(&grid, step(POS[s], OUT[s]), OUT[prev])?
+    fn boundary_edges_at(&self, v: u32) -> usize {
+        self.adj.boundary_edges[v as usize] as usize
+    }
+    fn is_boundary_edge(&self, a: u32, b: u32) -> bool {
+        self.cage.boundary.contains(&edge_key(a, b))
+    }
+}
+
+/// The whole control cage seen through [`Neighbourhood`].
+struct MeshView<'a> {
+    mesh: &'a PolyMesh,
+    topo: &'a Topology,
+}
+
+impl Neighbourhood for MeshView<'_> {
+    fn face(&self, f: u32) -> &[u32] {
+        &self.mesh.faces[f as usize]
+    }
+    fn face_along(&self, a: u32, b: u32) -> Option<u32> {
+        let e = self.topo.edge_between(a, b)?;
+        self.topo.edge_faces[e as usize]
+            .iter()
+            .copied()
+            .filter(|&f| f != crate::mesh::NO_FACE)
+            .find(|&f| {
+                let face = &self.mesh.faces[f as usize];
+                let k = face.iter().position(|&x| x == a).unwrap_or(0);
+                face[(k + 1) % face.len()] == b
+            })
+    }
+    fn vertex_faces(&self, v: u32) -> (usize, bool) {
+        (self.topo.vertex_faces[v as usize].len(), true)
+    }
+    fn boundary_edges_at(&self, v: u32) -> usize {
+        if self.topo.on_boundary[v as usize] {
+            2
         } else {
-            return None;
-        };
-        grid[c.0][c.1] = Some(p);
-    }
-    let mut out = Vec::with_capacity(16);
-    for j in 0..4 {
-        for row in &grid {
-            out.push(row[j].clone()?);
+            0
         }
     }
-    Some(out)
+    fn is_boundary_edge(&self, a: u32, b: u32) -> bool {
+        self.topo
+            .edge_between(a, b)
+            .is_some_and(|e| self.topo.is_boundary_edge(e))
+    }
+}
+
+/// Stencils of a regular patch at `uvs`, straight from its recipes.
+fn patch_stencils(patch: &[Recipe; 16], uvs: &[[f64; 2]]) -> Vec<LimitStencil> {
+    uvs.iter()
+        .map(|&[u, v]| {
+            let w = bicubic_weights(u, v, 1.0);
+            let mut rows: Vec<(u32, [f64; 6])> = Vec::with_capacity(16);
+            for (c, recipe) in patch.iter().enumerate() {
+                for &(i, a) in recipe {
+                    let k = match rows.iter().position(|r| r.0 == i) {
+                        Some(k) => k,
+                        None => {
+                            rows.push((i, [0.0; 6]));
+                            rows.len() - 1
+                        }
+                    };
+                    for d in 0..6 {
+                        rows[k].1[d] += a * w[d][c];
+                    }
+                }
+            }
+            rows.retain(|r| r.1.iter().any(|&x| x != 0.0));
+            rows.sort_unstable_by_key(|r| r.0);
+            LimitStencil {
+                indices: rows.iter().map(|r| r.0).collect(),
+                weights: rows.iter().map(|r| r.1).collect(),
+            }
+        })
+        .collect()
+}
+
+/// The dense control grid of face 0 of a local cage, if it is a regular patch with valid points.
+fn regular_grid(cage: &Cage<Vec<f64>>, adj: &CageAdjacency) -> Option<Vec<Vec<f64>>> {
+    let patch = regular_patch(&CageView { cage, adj }, 0)?;
+    patch
+        .iter()
+        .map(|recipe| {
+            let mut acc: Option<Vec<f64>> = None;
+            for &(i, a) in recipe {
+                let p = cage.points[i as usize].as_ref()?;
+                let acc = acc.get_or_insert_with(|| vec![0.0; p.len()]);
+                for (s, x) in acc.iter_mut().zip(p) {
+                    *s += a * x;
+                }
+            }
+            acc
+        })
+        .collect()
 }
 
 /// Evaluates the points `(slot, u, v)` of face 0 of `cage` at refinement depth `depth`, writing
