@@ -39,7 +39,10 @@ fn mesh_summary_of_the_shipped_samples() {
     }
     let (rc, out, _) = ks_fit(&["mesh", "meshes/strip_8x12.obj"]);
     assert_eq!(rc, 0);
-    assert!(out.contains("faces by kind: regular 60, boundary 36, extraordinary 0"), "{out}");
+    assert!(
+        out.contains("faces by kind: regular 60, boundary 36, extraordinary 0"),
+        "{out}"
+    );
     assert!(out.contains("boundary edges: 40"), "{out}");
     let (rc, out, _) = ks_fit(&["mesh", "meshes/fan4_boundary.obj"]);
     assert_eq!(rc, 0);
@@ -48,15 +51,27 @@ fn mesh_summary_of_the_shipped_samples() {
 
 #[test]
 fn limit_prints_one_csv_row_with_the_documented_header() {
-    let (rc, out, err) = ks_fit(&["mesh", "meshes/strip_8x12.obj", "--limit", "9", "0.5", "0.25"]);
+    let (rc, out, err) = ks_fit(&[
+        "mesh",
+        "meshes/strip_8x12.obj",
+        "--limit",
+        "9",
+        "0.5",
+        "0.25",
+    ]);
     assert_eq!(rc, 0, "{err}");
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines[0], "x,y,z,xu,yu,zu,xv,yv,zv,xuu,yuu,zuu,xuv,yuv,zuv,xvv,yvv,zvv");
+    assert_eq!(
+        lines[0],
+        "x,y,z,xu,yu,zu,xv,yv,zv,xuu,yuu,zuu,xuv,yuv,zuv,xvv,yvv,zvv"
+    );
     assert_eq!(lines.len(), 2);
     let v: Vec<f64> = lines[1].split(',').map(|x| x.parse().unwrap()).collect();
     assert_eq!(v.len(), 18);
     // face 9 of the 8 × 12 strip is face (1, 1): x = (1 + u)·6.25 mm, y = (1 + v)·6.25 mm
-    let expect = [0.009375, 0.0078125, 0.0, 0.00625, 0.0, 0.0, 0.0, 0.00625, 0.0];
+    let expect = [
+        0.009375, 0.0078125, 0.0, 0.00625, 0.0, 0.0, 0.0, 0.00625, 0.0,
+    ];
     for (a, b) in v.iter().zip(expect) {
         assert!((a - b).abs() < 1e-15, "{v:?}");
     }
@@ -75,8 +90,14 @@ fn triangle_meshes_are_refined_once_with_a_note() {
 fn bad_input_is_one_line_naming_file_and_line_with_exit_code_2() {
     let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
     let cases = [
-        (temp_file("badnum.obj", "v 0 0 0\nv 1 zero 0\n"), ":2: bad vertex coordinate 'zero'"),
-        (temp_file("range.obj", &format!("{quad}f 1 2 3 5\n")), ":5: vertex index 5 out of range"),
+        (
+            temp_file("badnum.obj", "v 0 0 0\nv 1 zero 0\n"),
+            ":2: bad vertex coordinate 'zero'",
+        ),
+        (
+            temp_file("range.obj", &format!("{quad}f 1 2 3 5\n")),
+            ":5: vertex index 5 out of range",
+        ),
         (
             temp_file(
                 "nonmanifold.obj",
@@ -85,14 +106,20 @@ fn bad_input_is_one_line_naming_file_and_line_with_exit_code_2() {
             ":9: non-manifold edge",
         ),
         (temp_file("empty.obj", ""), ": empty mesh"),
-        ("does/not/exist.obj".to_string(), "does/not/exist.obj: cannot read file"),
+        (
+            "does/not/exist.obj".to_string(),
+            "does/not/exist.obj: cannot read file",
+        ),
     ];
     for (path, want) in cases {
         let (rc, out, err) = ks_fit(&["mesh", &path]);
         assert_eq!(rc, 2, "{path}: {err}");
         assert!(out.is_empty());
         assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.contains(&path) && err.contains(want), "{err:?} should name {path} and say {want:?}");
+        assert!(
+            err.contains(&path) && err.contains(want),
+            "{err:?} should name {path} and say {want:?}"
+        );
         assert!(!err.contains("panicked"));
     }
     for args in [

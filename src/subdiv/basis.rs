@@ -3,7 +3,10 @@
 //! This is the hand-off to the shell kinematics: assembly only gathers control points through
 //! these stencils and scatters forces back; no patch type leaks past this module.
 
-use super::surface::{BasisError, BoundaryRule, FaceKind, LimitStencil, LimitSurface};
+use super::bspline::bicubic_weights;
+use super::surface::{
+    BasisError, BoundaryRule, FaceKind, LimitStencil, LimitSurface, StencilTable,
+};
 use crate::mesh::PolyMesh;
 use crate::quadrature::GaussLegendre;
 use crate::Vec3;
@@ -25,9 +28,8 @@ impl Default for BasisOptions {
     }
 }
 
-/// Precomputed limit stencils at the Gauss points of every face, stored as flat arrays:
-/// quadrature point q (face `q / points_per_face`) has the stencil rows
-/// `offsets[q]..offsets[q + 1]` of `indices` and `weights`.
+/// Precomputed limit stencils at the Gauss points of every face: quadrature point q belongs to
+/// face `q / points_per_face` and its stencil is `stencils.row(q)`.
 #[derive(Clone, Debug)]
 pub struct LimitBasis {
     pub options: BasisOptions,
@@ -41,9 +43,7 @@ pub struct LimitBasis {
     pub face_uv: Vec<[f64; 2]>,
     /// Quadrature weight × parametric area of each point (parametric area is 1 per face).
     pub quad_weight: Vec<f64>,
-    pub offsets: Vec<u32>,
-    pub indices: Vec<u32>,
-    pub weights: Vec<[f64; 6]>,
+    pub stencils: StencilTable,
 }
 
 /// Building a basis failed.
@@ -69,21 +69,20 @@ impl LimitBasis {
     ) -> Result<Self, BasisBuildError> {
         let rule = GaussLegendre::new(gauss_points)?.on_unit_square();
         let face_uv: Vec<[f64; 2]> = rule.iter().map(|r| r.0).collect();
+        let bicubic: Vec<[[f64; 16]; 6]> = face_uv
+            .iter()
+            .map(|&[u, v]| bicubic_weights(u, v, 1.0))
+            .collect();
         let nf = surface.num_faces();
         let npf = face_uv.len();
-        let mut offsets = Vec::with_capacity(nf * npf + 1);
-        let mut indices = Vec::new();
-        let mut weights = Vec::new();
-        let mut quad_weight = Vec::with_capacity(nf * npf);
-        offsets.push(0u32);
+        let mut stencils = StencilTable::new();
+        stencils.offsets.reserve(nf * npf);
+        stencils.indices.reserve(16 * nf * npf);
+        stencils.weights.reserve(16 * nf * npf);
         for face in 0..nf {
-            for (s, (_, w)) in surface.stencils(face, &face_uv)?.into_iter().zip(&rule) {
-                indices.extend_from_slice(&s.indices);
-                weights.extend_from_slice(&s.weights);
-                offsets.push(indices.len() as u32);
-                quad_weight.push(*w);
-            }
+            surface.append_stencils(face, &face_uv, Some(&bicubic), &mut stencils)?;
         }
+        let quad_weight = (0..nf).flat_map(|_| rule.iter().map(|r| r.1)).collect();
         Ok(Self {
             options: BasisOptions {
                 boundary: surface.rule(),
@@ -96,9 +95,7 @@ impl LimitBasis {
             points_per_face: npf,
             face_uv,
             quad_weight,
-            offsets,
-            indices,
-            weights,
+            stencils,
         })
     }
 
@@ -109,17 +106,12 @@ impl LimitBasis {
 
     /// Stencil of quadrature point `q`.
     pub fn stencil(&self, q: usize) -> (&[u32], &[[f64; 6]]) {
-        let r = self.offsets[q] as usize..self.offsets[q + 1] as usize;
-        (&self.indices[r.clone()], &self.weights[r])
+        self.stencils.row(q)
     }
 
     /// Owned copy of a stencil.
     pub fn limit_stencil(&self, q: usize) -> LimitStencil {
-        let (i, w) = self.stencil(q);
-        LimitStencil {
-            indices: i.to_vec(),
-            weights: w.to_vec(),
-        }
+        self.stencils.get(q)
     }
 
     /// Area of the limit surface for control positions `x`: Σ_q w_q |x_u × x_v|.
@@ -157,10 +149,7 @@ impl LimitBasis {
     /// Mean and largest number of control points per stencil.
     pub fn stencil_sizes(&self) -> (f64, usize) {
         let n = self.num_points();
-        let max = (0..n)
-            .map(|q| (self.offsets[q + 1] - self.offsets[q]) as usize)
-            .max()
-            .unwrap_or(0);
-        (self.indices.len() as f64 / n.max(1) as f64, max)
+        let max = (0..n).map(|q| self.stencil(q).0.len()).max().unwrap_or(0);
+        (self.stencils.indices.len() as f64 / n.max(1) as f64, max)
     }
 }

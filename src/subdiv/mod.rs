@@ -21,5 +21,5 @@ mod surface;
 pub use basis::{BasisBuildError, BasisOptions, LimitBasis};
 pub use cage::refine_uniform;
 pub use surface::{
-    deriv, BasisError, BoundaryRule, FaceKind, LimitPoint, LimitStencil, LimitSurface,
+    deriv, BasisError, BoundaryRule, FaceKind, LimitPoint, LimitStencil, LimitSurface, StencilTable,
 };

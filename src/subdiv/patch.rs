@@ -30,10 +30,7 @@ const POS: [(usize, usize); 4] = [(1, 1), (2, 1), (2, 2), (1, 2)];
 const OUT: [(isize, isize); 4] = [(0, -1), (1, 0), (0, 1), (-1, 0)];
 
 fn step(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {
-    (
-        (p.0 as isize + d.0) as usize,
-        (p.1 as isize + d.1) as usize,
-    )
+    ((p.0 as isize + d.0) as usize, (p.1 as isize + d.1) as usize)
 }
 
 fn back(p: (usize, usize), d: (isize, isize)) -> (usize, usize) {

@@ -136,6 +136,54 @@ impl LimitStencil {
     }
 }
 
+/// Many stencils in flat arrays: stencil q is rows `offsets[q]..offsets[q + 1]` of `indices`
+/// and `weights`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StencilTable {
+    pub offsets: Vec<u32>,
+    pub indices: Vec<u32>,
+    pub weights: Vec<[f64; 6]>,
+}
+
+impl Default for StencilTable {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl StencilTable {
+    pub fn new() -> Self {
+        Self {
+            offsets: vec![0],
+            indices: Vec::new(),
+            weights: Vec::new(),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Stencil q as slices.
+    pub fn row(&self, q: usize) -> (&[u32], &[[f64; 6]]) {
+        let r = self.offsets[q] as usize..self.offsets[q + 1] as usize;
+        (&self.indices[r.clone()], &self.weights[r])
+    }
+
+    /// Owned copy of stencil q.
+    pub fn get(&self, q: usize) -> LimitStencil {
+        let (i, w) = self.row(q);
+        LimitStencil {
+            indices: i.to_vec(),
+            weights: w.to_vec(),
+        }
+    }
+}
+
 /// Deepest local refinement before a point is declared to sit on an extraordinary vertex.
 const MAX_DEPTH: u32 = 60;
 
@@ -236,6 +284,21 @@ impl LimitSurface {
 
     /// Stencils at several points of one face (sharing the local refinement work).
     pub fn stencils(&self, face: usize, uvs: &[[f64; 2]]) -> Result<Vec<LimitStencil>, BasisError> {
+        let mut table = StencilTable::new();
+        self.append_stencils(face, uvs, None, &mut table)?;
+        Ok((0..uvs.len()).map(|q| table.get(q)).collect())
+    }
+
+    /// Appends the stencils at `uvs` of `face` to `table`, one entry per point. `bicubic`, when
+    /// given, holds `bicubic_weights(u, v, 1)` for each of the `uvs` (a quadrature rule reuses it
+    /// on every face).
+    pub(crate) fn append_stencils(
+        &self,
+        face: usize,
+        uvs: &[[f64; 2]],
+        bicubic: Option<&[[[f64; 16]; 6]]>,
+        table: &mut StencilTable,
+    ) -> Result<(), BasisError> {
         if face >= self.num_mesh_faces {
             return Err(BasisError::NoSuchFace {
                 face,
@@ -248,7 +311,13 @@ impl LimitSurface {
             }
         }
         if let Some(patch) = &self.patches[face] {
-            return Ok(patch_stencils(patch, uvs));
+            for (q, &[u, v]) in uvs.iter().enumerate() {
+                match bicubic {
+                    Some(w) => append_patch_stencil(patch, &w[q], table),
+                    None => append_patch_stencil(patch, &bicubic_weights(u, v, 1.0), table),
+                }
+            }
+            return Ok(());
         }
         let (cage, global) = self.face_cage(face);
         let pts: Vec<(usize, f64, f64)> = uvs
@@ -264,10 +333,10 @@ impl LimitSurface {
                 v: uvs[slot][1],
             }
         })?;
-        Ok(dense
-            .into_iter()
-            .map(|d| sparse_stencil(&d.unwrap_or_default(), &global))
-            .collect())
+        for d in dense {
+            append_dense_stencil(&d.unwrap_or_default(), &global, table);
+        }
+        Ok(())
     }
 
     /// The stencil at one point.
@@ -364,9 +433,10 @@ fn classify_faces(mesh: &PolyMesh, topo: &Topology) -> Vec<FaceKind> {
         .collect()
 }
 
-/// Dense local weights → sparse stencil over global indices, sorted by index. Only exact zeros
-/// are dropped (they are the structural zeros of the composed subdivision matrices).
-fn sparse_stencil(dense: &[Vec<f64>; 6], global: &[u32]) -> LimitStencil {
+/// Dense local weights → sparse stencil over global indices, sorted by index, appended to
+/// `table`. Only exact zeros are dropped (they are the structural zeros of the composed
+/// subdivision matrices).
+fn append_dense_stencil(dense: &[Vec<f64>; 6], global: &[u32], table: &mut StencilTable) {
     let mut rows: Vec<(u32, [f64; 6])> = (0..global.len())
         .filter_map(|i| {
             let w = std::array::from_fn(|k| dense[k].get(i).copied().unwrap_or(0.0));
@@ -374,10 +444,11 @@ fn sparse_stencil(dense: &[Vec<f64>; 6], global: &[u32]) -> LimitStencil {
         })
         .collect();
     rows.sort_by_key(|r| r.0);
-    LimitStencil {
-        indices: rows.iter().map(|r| r.0).collect(),
-        weights: rows.iter().map(|r| r.1).collect(),
+    for (i, w) in rows {
+        table.indices.push(i);
+        table.weights.push(w);
     }
+    table.offsets.push(table.indices.len() as u32);
 }
 
 /// A local cage seen through [`Neighbourhood`].
@@ -446,34 +517,33 @@ impl Neighbourhood for MeshView<'_> {
     }
 }
 
-/// Stencils of a regular patch at `uvs`, straight from its recipes.
-fn patch_stencils(patch: &[Recipe; 16], uvs: &[[f64; 2]]) -> Vec<LimitStencil> {
-    uvs.iter()
-        .map(|&[u, v]| {
-            let w = bicubic_weights(u, v, 1.0);
-            let mut rows: Vec<(u32, [f64; 6])> = Vec::with_capacity(16);
-            for (c, recipe) in patch.iter().enumerate() {
-                for &(i, a) in recipe {
-                    let k = match rows.iter().position(|r| r.0 == i) {
-                        Some(k) => k,
-                        None => {
-                            rows.push((i, [0.0; 6]));
-                            rows.len() - 1
-                        }
-                    };
-                    for d in 0..6 {
-                        rows[k].1[d] += a * w[d][c];
-                    }
+/// Appends the stencil of a regular patch for one set of bicubic weights (`w[d][c]`: derivative
+/// d, grid entry c) to `table`: at most 16 control points, no allocation.
+fn append_patch_stencil(patch: &[Recipe; 16], w: &[[f64; 16]; 6], table: &mut StencilTable) {
+    let mut rows = [(0u32, [0.0f64; 6]); 16];
+    let mut n = 0;
+    for (c, recipe) in patch.iter().enumerate() {
+        for &(i, a) in recipe {
+            let k = match rows[..n].iter().position(|r| r.0 == i) {
+                Some(k) => k,
+                None => {
+                    rows[n] = (i, [0.0; 6]);
+                    n += 1;
+                    n - 1
                 }
+            };
+            for d in 0..6 {
+                rows[k].1[d] += a * w[d][c];
             }
-            rows.retain(|r| r.1.iter().any(|&x| x != 0.0));
-            rows.sort_unstable_by_key(|r| r.0);
-            LimitStencil {
-                indices: rows.iter().map(|r| r.0).collect(),
-                weights: rows.iter().map(|r| r.1).collect(),
-            }
-        })
-        .collect()
+        }
+    }
+    let rows = &mut rows[..n];
+    rows.sort_unstable_by_key(|r| r.0);
+    for r in rows.iter().filter(|r| r.1.iter().any(|&x| x != 0.0)) {
+        table.indices.push(r.0);
+        table.weights.push(r.1);
+    }
+    table.offsets.push(table.indices.len() as u32);
 }
 
 /// The dense control grid of face 0 of a local cage, if it is a regular patch with valid points.
