@@ -81,10 +81,20 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                     let n: i64 = idx
                         .parse()
                         .map_err(|_| err(lineno, format!("bad vertex index '{w}'")))?;
-                    let count = positions.len() as i64;
+                    // negative indices count back from the vertices read so far; positive
+                    // ones may refer forward and are checked once the whole file is read
                     let resolved = if n > 0 {
                         n - 1
                     } else if n < 0 {
+                        let count = positions.len() as i64;
+                        if count + n < 0 {
+                            return Err(err(
+                                lineno,
+                                format!(
+                                    "vertex index {n} out of range ({count} vertices defined so far)"
+                                ),
+                            ));
+                        }
                         count + n
                     } else {
                         return Err(err(
@@ -92,14 +102,6 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                             "vertex index 0 (OBJ indices start at 1)".into(),
                         ));
                     };
-                    if resolved < 0 || resolved >= count {
-                        return Err(err(
-                            lineno,
-                            format!(
-                                "vertex index {n} out of range ({count} vertices defined so far)"
-                            ),
-                        ));
-                    }
                     face.push(resolved as u32);
                 }
                 if face.len() < 3 {
@@ -124,6 +126,18 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                 "no faces: the file defines vertices only".into()
             },
         });
+    }
+    for (face, &line) in faces.iter().zip(&face_lines) {
+        if let Some(&bad) = face.iter().find(|&&v| v as usize >= positions.len()) {
+            return Err(err(
+                line,
+                format!(
+                    "vertex index {} out of range (the file defines {} vertices)",
+                    bad + 1,
+                    positions.len()
+                ),
+            ));
+        }
     }
     let mesh = PolyMesh::new(positions, faces);
     let topology = Topology::build(&mesh).map_err(|TopologyError { face, message }| ObjError {
@@ -195,6 +209,12 @@ mod tests {
             let got = parse_obj(text, "t.obj").unwrap_err().to_string();
             assert!(got.starts_with(want), "{got:?} should start with {want:?}");
         }
+    }
+
+    #[test]
+    fn positive_indices_may_refer_forward() {
+        let m = parse_obj("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n", "t.obj").unwrap();
+        assert_eq!(m.mesh.faces, vec![vec![0, 1, 2]]);
     }
 
     #[test]
