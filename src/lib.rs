@@ -14,6 +14,7 @@
 
 pub mod mesh;
 pub mod quadrature;
+pub mod shell;
 pub mod subdiv;
 
 /// A point or vector in 3-space, SI units inside the engine.

@@ -1,0 +1,308 @@
+//! Kirchhoff–Love thin-shell kinematics at one Gauss point (Clyde et al. 2017 §3; Cirak, Ortiz &
+//! Schröder 2000).
+//!
+//! The limit surface x(θ¹, θ²) gives the tangents a_α = x,_α, the unit normal
+//! a₃ = a₁ × a₂ / |a₁ × a₂|, the metric a_αβ = a_α · a_β and the curvature b_αβ = x,_αβ · a₃.
+//! With capitals for the rest shape, the membrane strain is ε_αβ = ½(a_αβ − A_αβ) and the bending
+//! strain κ_αβ = B_αβ − b_αβ, so that the Green strain at height ξ through the thickness is
+//! E(ξ) ≈ ε + ξ κ. Both are expressed in the warp/weft frame of the rest tangent plane,
+//! Ẽ_ij = E_αβ c_i^α c_j^β with c_i^α = d_i · A^α (d₁ warp, d₂ weft, A^α the contravariant rest
+//! basis); this map is linear and precomputed per point ([`RestPoint::to_material`]).
+//!
+//! Everything here is a function of the *kinematic vector* y = (a₁, a₂, x,₁₁, x,₁₂, x,₂₂) ∈ ℝ¹⁵,
+//! which is linear in the control points through the limit stencil; [`StrainJet`] carries the
+//! value, gradient and Hessian of each strain with respect to y, in closed form. Strain vectors
+//! are (E₁₁, E₂₂, E₁₂) with tensor (not engineering) shear.
+
+use crate::Vec3;
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+/// Length of the kinematic vector y.
+pub const NY: usize = 15;
+pub type YVec = SVector<f64, NY>;
+pub type YMat = SMatrix<f64, NY, NY>;
+
+/// Offsets of a₁, a₂, x,₁₁, x,₁₂, x,₂₂ in y.
+const A1: usize = 0;
+const A2: usize = 3;
+const H: [usize; 3] = [6, 9, 12];
+
+/// Three strain components with their gradients and Hessians with respect to y.
+#[derive(Clone, Debug)]
+pub struct StrainJet {
+    pub value: [f64; 3],
+    pub grad: [YVec; 3],
+    pub hess: [YMat; 3],
+}
+
+impl StrainJet {
+    fn zero() -> Self {
+        Self {
+            value: [0.0; 3],
+            grad: [YVec::zeros(); 3],
+            hess: [YMat::zeros(); 3],
+        }
+    }
+
+    /// The jet of T·E (a fixed linear map of the components).
+    pub fn mapped(&self, t: &Matrix3<f64>) -> StrainJet {
+        let mut out = StrainJet::zero();
+        for k in 0..3 {
+            for j in 0..3 {
+                let a = t[(k, j)];
+                if a != 0.0 {
+                    out.value[k] += a * self.value[j];
+                    out.grad[k] += a * self.grad[j];
+                    out.hess[k] += a * self.hess[j];
+                }
+            }
+        }
+        out
+    }
+}
+
+fn v3(y: &YVec, at: usize) -> Vector3<f64> {
+    Vector3::new(y[at], y[at + 1], y[at + 2])
+}
+
+fn set_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
+    m.fixed_view_mut::<3, 3>(r, c).copy_from(b);
+}
+
+fn add_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
+    let mut v = m.fixed_view_mut::<3, 3>(r, c);
+    v += b;
+}
+
+/// Membrane strain ε_αβ = ½(a_α·a_β − A_αβ) and its derivatives; `rest` is (A₁₁, A₂₂, A₁₂).
+pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
+    let (a1, a2) = (v3(y, A1), v3(y, A2));
+    let mut j = StrainJet::zero();
+    j.value = [
+        0.5 * (a1.dot(&a1) - rest[0]),
+        0.5 * (a2.dot(&a2) - rest[1]),
+        0.5 * (a1.dot(&a2) - rest[2]),
+    ];
+    j.grad[0].fixed_rows_mut::<3>(A1).copy_from(&a1);
+    j.grad[1].fixed_rows_mut::<3>(A2).copy_from(&a2);
+    j.grad[2].fixed_rows_mut::<3>(A1).copy_from(&(0.5 * a2));
+    j.grad[2].fixed_rows_mut::<3>(A2).copy_from(&(0.5 * a1));
+    let id = Matrix3::identity();
+    set_block(&mut j.hess[0], A1, A1, &id);
+    set_block(&mut j.hess[1], A2, A2, &id);
+    set_block(&mut j.hess[2], A1, A2, &(0.5 * id));
+    set_block(&mut j.hess[2], A2, A1, &(0.5 * id));
+    j
+}
+
+/// Skew matrix [v]× with [v]× w = v × w.
+fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+}
+
+/// Bending strain κ_αβ = B_αβ − x,_αβ · a₃ and its derivatives; `rest` is (B₁₁, B₂₂, B₁₂).
+///
+/// With m = a₁ × a₂, l = |m|, n = m / l and h = x,_αβ, the curvature b = h·m/l has
+/// ∂b/∂m = v = (h − (h·n) n)/l, ∂²b/∂m² = −(h nᵀ + n hᵀ + (h·n)(I − 3 n nᵀ))/l² and
+/// ∂²b/∂m∂h = (I − n nᵀ)/l; the chain rule through m (∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]×, and
+/// ∂²m/∂a₁∂a₂ contracted with v = −[v]×) gives the rest.
+pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
+    let (a1, a2) = (v3(y, A1), v3(y, A2));
+    let m = a1.cross(&a2);
+    let l = m.norm();
+    let n = m / l;
+    let p = Matrix3::identity() - n * n.transpose();
+    let (s1, s2) = (skew(&a1), skew(&a2));
+    let mut j = StrainJet::zero();
+    // component order (11, 22, 12) against the second derivatives stored as (11, 12, 22)
+    for (k, &hk) in [H[0], H[2], H[1]].iter().enumerate() {
+        let h = v3(y, hk);
+        let hn = h.dot(&n);
+        let v = (h - hn * n) / l;
+        let mm = -(h * n.transpose()
+            + n * h.transpose()
+            + hn * (Matrix3::identity() - 3.0 * n * n.transpose()))
+            / (l * l);
+        let b = h.dot(&n);
+        j.value[k] = rest[k] - b;
+        let g = &mut j.grad[k];
+        g.fixed_rows_mut::<3>(A1).copy_from(&(-a2.cross(&v)));
+        g.fixed_rows_mut::<3>(A2).copy_from(&(-v.cross(&a1)));
+        g.fixed_rows_mut::<3>(hk).copy_from(&(-n));
+        let hs = &mut j.hess[k];
+        let b11 = s2 * mm * s2; // −(−[a₂]× M [a₂]×)
+        let b22 = s1 * mm * s1;
+        let b12 = -(s2 * mm * s1 - skew(&v));
+        let b1h = -(s2 * p / l);
+        let b2h = s1 * p / l;
+        set_block(hs, A1, A1, &b11);
+        set_block(hs, A2, A2, &b22);
+        set_block(hs, A1, A2, &b12);
+        set_block(hs, A2, A1, &b12.transpose());
+        add_block(hs, A1, hk, &b1h);
+        add_block(hs, hk, A1, &b1h.transpose());
+        add_block(hs, A2, hk, &b2h);
+        add_block(hs, hk, A2, &b2h.transpose());
+    }
+    j
+}
+
+/// Per-Gauss-point rest data.
+#[derive(Clone, Debug)]
+pub struct RestPoint {
+    /// Rest metric (A₁₁, A₂₂, A₁₂).
+    pub metric: [f64; 3],
+    /// Rest curvature (B₁₁, B₂₂, B₁₂).
+    pub curvature: [f64; 3],
+    /// Quadrature weight × rest area element √det A.
+    pub d_area: f64,
+    /// Maps (E₁₁, E₂₂, E₁₂) in surface coordinates to (Ẽ₁₁, Ẽ₂₂, Ẽ₁₂) in the warp/weft frame.
+    pub to_material: Matrix3<f64>,
+}
+
+/// A rest point could not be set up.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum RestError {
+    #[error("degenerate rest surface at a Gauss point (tangents parallel or zero)")]
+    Degenerate,
+    #[error("the warp direction is normal to the rest surface at a Gauss point")]
+    WarpAlongNormal,
+}
+
+/// The kinematic vector y at a point from its limit derivatives [x, x_u, x_v, x_uu, x_uv, x_vv].
+pub fn kinematic_vector(d: &[Vec3; 6]) -> YVec {
+    let mut y = YVec::zeros();
+    for k in 0..5 {
+        for c in 0..3 {
+            y[3 * k + c] = d[k + 1][c];
+        }
+    }
+    y
+}
+
+impl RestPoint {
+    /// Rest data from the rest limit derivatives `d`, the quadrature weight and the warp
+    /// direction (projected onto the tangent plane).
+    pub fn new(d: &[Vec3; 6], weight: f64, warp: Vec3) -> Result<Self, RestError> {
+        let y = kinematic_vector(d);
+        let (a1, a2) = (v3(&y, A1), v3(&y, A2));
+        let m = a1.cross(&a2);
+        let l = m.norm();
+        if !(l > 1e-300) || !l.is_finite() {
+            return Err(RestError::Degenerate);
+        }
+        let n = m / l;
+        let metric = [a1.dot(&a1), a2.dot(&a2), a1.dot(&a2)];
+        let b = |k: usize| v3(&y, H[k]).dot(&n);
+        let curvature = [b(0), b(2), b(1)];
+        let det = metric[0] * metric[1] - metric[2] * metric[2];
+        // contravariant basis A^α = A^{αβ} A_β
+        let (i11, i22, i12) = (metric[1] / det, metric[0] / det, -metric[2] / det);
+        let c1 = i11 * a1 + i12 * a2;
+        let c2 = i12 * a1 + i22 * a2;
+        let w = Vector3::new(warp[0], warp[1], warp[2]);
+        let d1 = w - w.dot(&n) * n;
+        if d1.norm() <= 1e-12 * w.norm() || !(d1.norm() > 0.0) {
+            return Err(RestError::WarpAlongNormal);
+        }
+        let d1 = d1.normalize();
+        let d2 = n.cross(&d1);
+        // c_i^α = d_i · A^α
+        let (p1, p2) = ([d1.dot(&c1), d1.dot(&c2)], [d2.dot(&c1), d2.dot(&c2)]);
+        let to_material = Matrix3::new(
+            p1[0] * p1[0],
+            p1[1] * p1[1],
+            2.0 * p1[0] * p1[1],
+            p2[0] * p2[0],
+            p2[1] * p2[1],
+            2.0 * p2[0] * p2[1],
+            p1[0] * p2[0],
+            p1[1] * p2[1],
+            p1[0] * p2[1] + p1[1] * p2[0],
+        );
+        Ok(Self {
+            metric,
+            curvature,
+            d_area: weight * det.sqrt(),
+            to_material,
+        })
+    }
+
+    /// Membrane and bending strain jets in the warp/weft frame.
+    pub fn strains(&self, y: &YVec) -> (StrainJet, StrainJet) {
+        (
+            membrane(y, self.metric).mapped(&self.to_material),
+            bending(y, self.curvature).mapped(&self.to_material),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample_y() -> YVec {
+        YVec::from_iterator([
+            1.1, 0.2, -0.1, 0.15, 0.9, 0.3, 0.05, -0.2, 0.4, 0.1, 0.3, -0.25, -0.3, 0.12, 0.6,
+        ])
+    }
+
+    fn check_jet(f: impl Fn(&YVec) -> StrainJet) {
+        let y0 = sample_y();
+        let j0 = f(&y0);
+        let h = 1e-6;
+        for i in 0..NY {
+            let mut yp = y0;
+            let mut ym = y0;
+            yp[i] += h;
+            ym[i] -= h;
+            let (jp, jm) = (f(&yp), f(&ym));
+            for k in 0..3 {
+                let fd = (jp.value[k] - jm.value[k]) / (2.0 * h);
+                assert!(
+                    (fd - j0.grad[k][i]).abs() < 1e-8,
+                    "grad k={k} i={i}: {fd} vs {}",
+                    j0.grad[k][i]
+                );
+                for r in 0..NY {
+                    let fd = (jp.grad[k][r] - jm.grad[k][r]) / (2.0 * h);
+                    assert!(
+                        (fd - j0.hess[k][(r, i)]).abs() < 1e-7,
+                        "hess k={k} ({r},{i}): {fd} vs {}",
+                        j0.hess[k][(r, i)]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn membrane_and_bending_derivatives_match_differences() {
+        check_jet(|y| membrane(y, [1.0, 0.8, 0.1]));
+        check_jet(|y| bending(y, [0.1, -0.2, 0.05]));
+    }
+
+    #[test]
+    fn material_frame_of_an_orthonormal_patch_is_a_rotation() {
+        // tangents along x and y, warp at 30° from x: Ẽ₁₁ is the strain along the warp
+        let d = [
+            [0.0; 3],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+        ];
+        let t = 30f64.to_radians();
+        let r = RestPoint::new(&d, 1.0, [t.cos(), t.sin(), 0.0]).unwrap();
+        // uniaxial strain along x: E = diag(1, 0) → Ẽ₁₁ = cos², Ẽ₂₂ = sin², Ẽ₁₂ = −sin cos
+        let e = r.to_material * Vector3::new(1.0, 0.0, 0.0);
+        assert!((e[0] - t.cos().powi(2)).abs() < 1e-15);
+        assert!((e[1] - t.sin().powi(2)).abs() < 1e-15);
+        assert!((e[2] + t.sin() * t.cos()).abs() < 1e-15);
+        assert_eq!(
+            RestPoint::new(&d, 1.0, [0.0, 0.0, 1.0]).unwrap_err(),
+            RestError::WarpAlongNormal
+        );
+    }
+}
