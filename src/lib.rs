@@ -12,9 +12,13 @@
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
 //! plain structs of arrays; see `DESIGN.md` in the repository for the map.
 
+pub mod assembly;
+pub mod material;
 pub mod mesh;
 pub mod quadrature;
+pub mod scene;
 pub mod shell;
+pub mod solve;
 pub mod subdiv;
 
 /// A point or vector in 3-space, SI units inside the engine.

@@ -1,0 +1,375 @@
+//! Assembly of the total energy, its gradient and its sparse Hessian over all Gauss points.
+//!
+//! Total energy (Clyde et al. 2017 §3): E(x) = Σ_q dA_q ∫ ψ(Ẽ_m + ξ Ẽ_b) dξ − Σ_q dA_q ρ g·x_q,
+//! the first term integrated through the thickness ξ ∈ [−τ/2, τ/2] with a Gauss–Legendre rule
+//! (three points integrate St. Venant–Kirchhoff exactly: its integrand is quadratic in ξ), the
+//! second the gravity potential of the areal density ρ over the rest area.
+//!
+//! Per Gauss point everything is first computed with respect to the 15-vector
+//! y = (a₁, a₂, x,₁₁, x,₁₂, x,₂₂) (see [`crate::shell`]), then expanded to the control points
+//! through the limit stencil: g_i = Σ_k W_ik g_k and H_ij = Σ_kl W_ik H_kl W_jl (3 × 3 blocks).
+//! With n stencil points that expansion costs about 45 n² + 225 n flops; for a regular face
+//! (n = 16) some 15 000 flops per Gauss point.
+//!
+//! The Hessian lives in a [`BlockMatrix`]: 3 × 3 blocks on the node pairs (i ≤ j) that share a
+//! Gauss point, a pattern built once per mesh.
+
+use crate::material::{Law, OutOfDomain};
+use crate::quadrature::GaussLegendre;
+use crate::shell::{kinematic_vector, RestError, RestPoint, YMat, YVec};
+use crate::subdiv::LimitBasis;
+use crate::Vec3;
+use nalgebra::{Matrix3, Vector3};
+use std::sync::Arc;
+
+/// Upper-triangular node-pair pattern in compressed rows: row i lists the nodes j ≥ i that share
+/// a Gauss point with i.
+#[derive(Clone, Debug)]
+pub struct BlockPattern {
+    pub num_nodes: usize,
+    pub row_ptr: Vec<usize>,
+    pub col: Vec<u32>,
+}
+
+impl BlockPattern {
+    /// Pattern of every pair of nodes within one face's stencils.
+    pub fn from_basis(basis: &LimitBasis) -> Self {
+        let n = basis.control_points.len();
+        let mut rows: Vec<Vec<u32>> = vec![Vec::new(); n];
+        let npf = basis.points_per_face;
+        let mut nodes: Vec<u32> = Vec::new();
+        for face in 0..basis.num_faces {
+            nodes.clear();
+            for q in face * npf..(face + 1) * npf {
+                nodes.extend_from_slice(basis.stencil(q).0);
+            }
+            nodes.sort_unstable();
+            nodes.dedup();
+            for (a, &i) in nodes.iter().enumerate() {
+                rows[i as usize].extend_from_slice(&nodes[a..]);
+            }
+        }
+        let mut row_ptr = vec![0];
+        let mut col = Vec::new();
+        for mut r in rows {
+            r.sort_unstable();
+            r.dedup();
+            col.extend(r);
+            row_ptr.push(col.len());
+        }
+        Self {
+            num_nodes: n,
+            row_ptr,
+            col,
+        }
+    }
+
+    /// Index of block (i, j), i ≤ j.
+    pub fn find(&self, i: u32, j: u32) -> Option<usize> {
+        let r = self.row_ptr[i as usize]..self.row_ptr[i as usize + 1];
+        self.col[r.clone()]
+            .binary_search(&j)
+            .ok()
+            .map(|k| r.start + k)
+    }
+
+    pub fn num_blocks(&self) -> usize {
+        self.col.len()
+    }
+}
+
+/// Symmetric matrix of 3 × 3 blocks on a [`BlockPattern`] (upper triangle stored).
+#[derive(Clone, Debug)]
+pub struct BlockMatrix {
+    pub pattern: Arc<BlockPattern>,
+    pub blocks: Vec<Matrix3<f64>>,
+}
+
+impl BlockMatrix {
+    pub fn zeros(pattern: Arc<BlockPattern>) -> Self {
+        let blocks = vec![Matrix3::zeros(); pattern.num_blocks()];
+        Self { pattern, blocks }
+    }
+
+    pub fn fill_zero(&mut self) {
+        self.blocks.iter_mut().for_each(|b| *b = Matrix3::zeros());
+    }
+
+    /// y = A x over all nodes.
+    pub fn mul(&self, x: &[Vec3], y: &mut [Vec3]) {
+        y.iter_mut().for_each(|v| *v = [0.0; 3]);
+        let p = &self.pattern;
+        for i in 0..p.num_nodes {
+            for k in p.row_ptr[i]..p.row_ptr[i + 1] {
+                let j = p.col[k] as usize;
+                let b = &self.blocks[k];
+                let xj = Vector3::from(x[j]);
+                let yi = b * xj;
+                for c in 0..3 {
+                    y[i][c] += yi[c];
+                }
+                if j != i {
+                    let yj = b.transpose() * Vector3::from(x[i]);
+                    for c in 0..3 {
+                        y[j][c] += yj[c];
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// What to assemble.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Want {
+    Energy,
+    Gradient,
+    Hessian,
+}
+
+/// A shell discretised on a limit basis, with its rest state, law, thickness and loads.
+pub struct ShellModel {
+    pub basis: LimitBasis,
+    pub rest: Vec<RestPoint>,
+    pub law: Arc<dyn Law>,
+    /// m
+    pub thickness: f64,
+    /// kg/m²
+    pub areal_density: f64,
+    /// m/s² (default (0, 0, −9.81) when gravity is on, zero otherwise)
+    gravity: Vec3,
+    /// ∂E_gravity/∂x_i (constant)
+    gravity_force: Vec<Vec3>,
+    /// (ξ, weight) through the thickness
+    thickness_rule: Vec<(f64, f64)>,
+    pub pattern: Arc<BlockPattern>,
+}
+
+/// Setting up a model failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    #[error("Gauss point {point}: {source}")]
+    Rest { point: usize, source: RestError },
+    #[error("thickness must be positive and finite, got {0}")]
+    Thickness(f64),
+}
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+impl ShellModel {
+    /// A model whose rest shape is the basis's control points, with the warp direction `warp`
+    /// (projected onto the rest tangent plane at every Gauss point).
+    pub fn new(
+        basis: LimitBasis,
+        warp: Vec3,
+        law: Arc<dyn Law>,
+        thickness: f64,
+        areal_density: f64,
+    ) -> Result<Self, ModelError> {
+        if !(thickness > 0.0 && thickness.is_finite()) {
+            return Err(ModelError::Thickness(thickness));
+        }
+        let x = &basis.control_points;
+        let rest = (0..basis.num_points())
+            .map(|q| {
+                let p = basis.limit_stencil(q).apply(x);
+                RestPoint::new(&p.d, basis.quad_weight[q], warp)
+                    .map_err(|source| ModelError::Rest { point: q, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let thickness_rule = GaussLegendre::new(3)
+            .expect("3 is a valid rule")
+            .through_thickness(thickness);
+        let pattern = Arc::new(BlockPattern::from_basis(&basis));
+        let mut model = Self {
+            gravity_force: vec![[0.0; 3]; basis.control_points.len()],
+            basis,
+            rest,
+            law,
+            thickness,
+            areal_density,
+            gravity: [0.0; 3],
+            thickness_rule,
+            pattern,
+        };
+        model.set_gravity([0.0; 3]);
+        Ok(model)
+    }
+
+    /// Sets the gravitational acceleration (m/s²), e.g. [0, 0, −9.80665], or zero.
+    pub fn set_gravity(&mut self, g: Vec3) {
+        self.gravity = g;
+        let f = &mut self.gravity_force;
+        f.iter_mut().for_each(|v| *v = [0.0; 3]);
+        for (q, rest) in self.rest.iter().enumerate() {
+            let (idx, w) = self.basis.stencil(q);
+            for (&i, w) in idx.iter().zip(w) {
+                for c in 0..3 {
+                    f[i as usize][c] -= self.areal_density * rest.d_area * w[0] * g[c];
+                }
+            }
+        }
+    }
+
+    pub fn gravity(&self) -> Vec3 {
+        self.gravity
+    }
+
+    /// Constant external force of gravity on each control point (−∂E_gravity/∂x).
+    pub fn gravity_load(&self) -> Vec<Vec3> {
+        self.gravity_force
+            .iter()
+            .map(|f| [-f[0], -f[1], -f[2]])
+            .collect()
+    }
+
+    pub fn num_nodes(&self) -> usize {
+        self.basis.control_points.len()
+    }
+
+    /// Energy, gradient and Hessian of one Gauss point with respect to y.
+    fn point_terms(
+        &self,
+        q: usize,
+        y: &YVec,
+        want: Want,
+    ) -> Result<(f64, YVec, Option<YMat>), OutOfDomain> {
+        let rest = &self.rest[q];
+        let (m, b) = rest.strains(y);
+        let em = Vector3::from(m.value);
+        let eb = Vector3::from(b.value);
+        let mut energy = 0.0;
+        let (mut n, mut mo) = (Vector3::zeros(), Vector3::zeros());
+        let (mut c0, mut c1, mut c2) = (Matrix3::zeros(), Matrix3::zeros(), Matrix3::zeros());
+        for &(xi, w) in &self.thickness_rule {
+            let r = self.law.response(&(em + xi * eb))?;
+            energy += w * r.psi;
+            if want != Want::Energy {
+                n += w * r.stress;
+                mo += w * xi * r.stress;
+            }
+            if want == Want::Hessian {
+                c0 += w * r.tangent;
+                c1 += (w * xi) * r.tangent;
+                c2 += (w * xi * xi) * r.tangent;
+            }
+        }
+        let da = rest.d_area;
+        if want == Want::Energy {
+            return Ok((da * energy, YVec::zeros(), None));
+        }
+        let mut g = YVec::zeros();
+        for k in 0..3 {
+            g += n[k] * m.grad[k] + mo[k] * b.grad[k];
+        }
+        if want == Want::Gradient {
+            return Ok((da * energy, da * g, None));
+        }
+        // Gᵀ C G terms: G rows are the strain gradients
+        let gm = nalgebra::SMatrix::<f64, 3, 15>::from_rows(&[
+            m.grad[0].transpose(),
+            m.grad[1].transpose(),
+            m.grad[2].transpose(),
+        ]);
+        let gb = nalgebra::SMatrix::<f64, 3, 15>::from_rows(&[
+            b.grad[0].transpose(),
+            b.grad[1].transpose(),
+            b.grad[2].transpose(),
+        ]);
+        let cross = gm.transpose() * c1 * gb;
+        let mut h = gm.transpose() * c0 * gm + cross + cross.transpose() + gb.transpose() * c2 * gb;
+        for k in 0..3 {
+            h += n[k] * m.hess[k] + mo[k] * b.hess[k];
+        }
+        Ok((da * energy, da * g, Some(da * h)))
+    }
+
+    /// Assembles the energy and, as asked, the gradient (over all nodes, into `grad`) and the
+    /// Hessian (into `hess`). Gravity is included.
+    pub fn assemble(
+        &self,
+        x: &[Vec3],
+        want: Want,
+        grad: Option<&mut [Vec3]>,
+        hess: Option<&mut BlockMatrix>,
+    ) -> Result<f64, OutOfDomain> {
+        let mut grad = grad;
+        let mut hess = hess;
+        if let Some(g) = grad.as_deref_mut() {
+            g.copy_from_slice(&self.gravity_force);
+        }
+        if let Some(h) = hess.as_deref_mut() {
+            h.fill_zero();
+        }
+        let mut energy: f64 = self
+            .gravity_force
+            .iter()
+            .zip(x)
+            .map(|(f, p)| f[0] * p[0] + f[1] * p[1] + f[2] * p[2])
+            .sum();
+        let mut r = vec![[Matrix3::<f64>::zeros(); 5]; 64];
+        for q in 0..self.basis.num_points() {
+            let (idx, w) = self.basis.stencil(q);
+            let mut d = [[0.0; 3]; 6];
+            for (&i, wi) in idx.iter().zip(w) {
+                let p = x[i as usize];
+                for k in 1..6 {
+                    for c in 0..3 {
+                        d[k][c] += wi[k] * p[c];
+                    }
+                }
+            }
+            let y = kinematic_vector(&d);
+            let (e, gy, hy) = self.point_terms(q, &y, want)?;
+            energy += e;
+            if let Some(g) = grad.as_deref_mut() {
+                for (&i, wi) in idx.iter().zip(w) {
+                    for k in 0..5 {
+                        for c in 0..3 {
+                            g[i as usize][c] += wi[k + 1] * gy[3 * k + c];
+                        }
+                    }
+                }
+            }
+            if let (Some(h), Some(hy)) = (hess.as_deref_mut(), hy) {
+                let n = idx.len();
+                if r.len() < n {
+                    r.resize(n, [Matrix3::zeros(); 5]);
+                }
+                // R_il = Σ_k W_ik H_kl
+                for a in 0..n {
+                    for l in 0..5 {
+                        let mut acc = Matrix3::zeros();
+                        for k in 0..5 {
+                            let s = w[a][k + 1];
+                            if s != 0.0 {
+                                acc += s * hy.fixed_view::<3, 3>(3 * k, 3 * l);
+                            }
+                        }
+                        r[a][l] = acc;
+                    }
+                }
+                for a in 0..n {
+                    for bb in a..n {
+                        let mut blk = Matrix3::zeros();
+                        for l in 0..5 {
+                            blk += w[bb][l + 1] * r[a][l];
+                        }
+                        let (i, j) = (idx[a], idx[bb]);
+                        // stencils are sorted by index, so i ≤ j
+                        if let Some(k) = h.pattern.find(i, j) {
+                            h.blocks[k] += blk;
+                        }
+                    }
+                }
+            }
+        }
+        Ok(energy)
+    }
+
+    /// Total energy.
+    pub fn energy(&self, x: &[Vec3]) -> Result<f64, OutOfDomain> {
+        self.assemble(x, Want::Energy, None, None)
+    }
+}

@@ -1,0 +1,128 @@
+//! Constitutive laws: energy per unit rest volume ψ(Ẽ) of the Green strain in the warp/weft
+//! frame, with its gradient (the second Piola–Kirchhoff stress) and Hessian (the tangent).
+//!
+//! Strains are (Ẽ₁₁, Ẽ₂₂, Ẽ₁₂) with tensor shear; 1 is the warp, 2 the weft. This module owns
+//! the orthotropic St. Venant–Kirchhoff law (Clyde et al. 2017, Eq. 2 with every η linear) and
+//! the material file; the paper's nonlinear η and the parameter derivatives the fitter needs
+//! extend [`Law`].
+
+mod file;
+
+pub use file::{load_material, parse_material, FabricMaterial, MaterialFileError};
+
+use nalgebra::{Matrix3, Vector3};
+
+/// ψ, ∂ψ/∂Ẽ and ∂²ψ/∂Ẽ² at one strain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Response {
+    pub psi: f64,
+    pub stress: Vector3<f64>,
+    pub tangent: Matrix3<f64>,
+}
+
+/// A strain at which the law cannot be evaluated (the solver shortens its step).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("material law undefined at strain {strain:?}")]
+pub struct OutOfDomain {
+    pub strain: [f64; 3],
+}
+
+/// A hyperelastic law of the in-plane Green strain.
+pub trait Law: Send + Sync {
+    fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain>;
+}
+
+/// ψ = a₁₁/2 Ẽ₁₁² + a₁₂ Ẽ₁₁Ẽ₂₂ + a₂₂/2 Ẽ₂₂² + G₁₂ Ẽ₁₂² (Pa). Isotropic when a₁₁ = a₂₂ and
+/// G₁₂ = a₁₁ − a₁₂ (Lamé: a₁₁ = λ + 2μ, a₁₂ = λ, G₁₂ = 2μ).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrthotropicStvk {
+    pub a11: f64,
+    pub a22: f64,
+    pub a12: f64,
+    pub g12: f64,
+}
+
+impl OrthotropicStvk {
+    /// The isotropic St. Venant–Kirchhoff law of Young's modulus `e` and Poisson ratio `nu`
+    /// (plane stress constants, as thin shells use).
+    pub fn isotropic(e: f64, nu: f64) -> Self {
+        let a11 = e / (1.0 - nu * nu);
+        let a12 = nu * a11;
+        Self {
+            a11,
+            a22: a11,
+            a12,
+            g12: a11 - a12,
+        }
+    }
+
+    fn tangent(&self) -> Matrix3<f64> {
+        Matrix3::new(
+            self.a11,
+            self.a12,
+            0.0,
+            self.a12,
+            self.a22,
+            0.0,
+            0.0,
+            0.0,
+            2.0 * self.g12,
+        )
+    }
+}
+
+impl Law for OrthotropicStvk {
+    fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
+        let c = self.tangent();
+        let stress = c * e;
+        Ok(Response {
+            psi: 0.5 * e.dot(&stress),
+            stress,
+            tangent: c,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stvk_energy_gradient_hessian_are_consistent() {
+        let law = OrthotropicStvk {
+            a11: 3.0e7,
+            a22: 1.2e7,
+            a12: 4.0e6,
+            g12: 9.0e5,
+        };
+        let e = Vector3::new(0.03, -0.01, 0.02);
+        let r = law.response(&e).unwrap();
+        let want = 0.5 * 3.0e7 * 0.03f64.powi(2)
+            + 4.0e6 * 0.03 * -0.01
+            + 0.5 * 1.2e7 * 0.01f64.powi(2)
+            + 9.0e5 * 0.02f64.powi(2);
+        assert!((r.psi - want).abs() < 1e-9 * want);
+        let h = 1e-7;
+        for i in 0..3 {
+            let mut ep = e;
+            let mut em = e;
+            ep[i] += h;
+            em[i] -= h;
+            let (rp, rm) = (law.response(&ep).unwrap(), law.response(&em).unwrap());
+            assert!(((rp.psi - rm.psi) / (2.0 * h) - r.stress[i]).abs() < 1e-6 * r.stress.norm());
+            for j in 0..3 {
+                let fd = (rp.stress[j] - rm.stress[j]) / (2.0 * h);
+                assert!((fd - r.tangent[(j, i)]).abs() < 1e-6 * 3e7);
+            }
+        }
+    }
+
+    #[test]
+    fn isotropic_constants_follow_the_lame_convention() {
+        let law = OrthotropicStvk::isotropic(1.0e6, 0.3);
+        assert_eq!(law.a11, law.a22);
+        assert!((law.g12 - (law.a11 - law.a12)).abs() < 1e-9);
+        // plane stress: a11 = E/(1−ν²)
+        assert!((law.a11 - 1.0e6 / 0.91).abs() < 1e-6);
+    }
+}

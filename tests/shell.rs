@@ -1,0 +1,251 @@
+//! The shell engine against finite differences, rigid motions and closed-form strips.
+
+use kshell::assembly::{BlockMatrix, ShellModel, Want};
+use kshell::material::{FabricMaterial, OrthotropicStvk};
+use kshell::mesh::{rectangular_grid, shapes, PolyMesh};
+use kshell::scene::TensileStrip;
+use kshell::subdiv::{BasisOptions, BoundaryRule, FaceKind, LimitBasis};
+use kshell::Vec3;
+use std::sync::Arc;
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+fn law() -> OrthotropicStvk {
+    OrthotropicStvk {
+        a11: 2.0e7,
+        a22: 1.2e7,
+        a12: 3.0e6,
+        g12: 1.5e6,
+    }
+}
+
+fn model_for(mesh: &PolyMesh, rule: BoundaryRule, tau: f64) -> ShellModel {
+    let basis = LimitBasis::new(
+        mesh,
+        BasisOptions {
+            boundary: rule,
+            gauss_points: 3,
+        },
+    )
+    .unwrap();
+    let mut m = ShellModel::new(basis, [0.8, 0.6, 0.1], Arc::new(law()), tau, 0.2).unwrap();
+    m.set_gravity([0.0, 0.0, -9.81]);
+    m
+}
+
+/// Small curved and flat meshes covering regular, boundary and extraordinary faces.
+fn cases() -> Vec<(&'static str, PolyMesh)> {
+    let mut curved = rectangular_grid(0.04, 0.06, 3, 4);
+    for p in &mut curved.positions {
+        p[2] = 4.0 * p[0] * p[0] - 3.0 * p[0] * p[1];
+    }
+    let scale = |mut m: PolyMesh, s: f64| {
+        for p in &mut m.positions {
+            for c in p.iter_mut() {
+                *c *= s;
+            }
+        }
+        m
+    };
+    vec![
+        ("flat grid", rectangular_grid(0.04, 0.06, 3, 4)),
+        ("curved grid", curved),
+        ("star5 (curved)", scale(shapes::star(5, 2), 0.03)),
+        ("L-shape (flat)", scale(shapes::l_shape(2), 0.02)),
+        ("cube", scale(shapes::cube(), 0.02)),
+    ]
+}
+
+fn perturbed(x: &[Vec3], rng: &mut Rng, amp: f64) -> Vec<Vec3> {
+    x.iter()
+        .map(|p| {
+            [
+                p[0] + amp * rng.next(),
+                p[1] + amp * rng.next(),
+                p[2] + amp * rng.next(),
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn gradient_and_hessian_match_central_differences() {
+    let mut rng = Rng(5);
+    let mut kinds = std::collections::HashSet::new();
+    for (name, mesh) in cases() {
+        for rule in [BoundaryRule::Phantom, BoundaryRule::Ghost] {
+            let tau = 5e-4;
+            let model = model_for(&mesh, rule, tau);
+            kinds.extend(model.basis.face_kinds.iter().copied());
+            let x = perturbed(&model.basis.control_points, &mut rng, 2e-3);
+            let n = x.len();
+            let mut g = vec![[0.0; 3]; n];
+            let mut h = BlockMatrix::zeros(model.pattern.clone());
+            model
+                .assemble(&x, Want::Hessian, Some(&mut g), Some(&mut h))
+                .unwrap();
+            let gscale = g.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+            let step = 1e-7;
+            let mut hcol = vec![[0.0; 3]; n];
+            let mut gp = vec![[0.0; 3]; n];
+            let mut gm = vec![[0.0; 3]; n];
+            for i in 0..n {
+                for c in 0..3 {
+                    let (mut xp, mut xm) = (x.clone(), x.clone());
+                    xp[i][c] += step;
+                    xm[i][c] -= step;
+                    let fd =
+                        (model.energy(&xp).unwrap() - model.energy(&xm).unwrap()) / (2.0 * step);
+                    assert!(
+                        (fd - g[i][c]).abs() <= 1e-6 * gscale,
+                        "{name} {rule:?}: gradient node {i} comp {c}: {fd} vs {}",
+                        g[i][c]
+                    );
+                    // Hessian column by differences of the gradient
+                    model
+                        .assemble(&xp, Want::Gradient, Some(&mut gp), None)
+                        .unwrap();
+                    model
+                        .assemble(&xm, Want::Gradient, Some(&mut gm), None)
+                        .unwrap();
+                    let mut e = vec![[0.0; 3]; n];
+                    e[i][c] = 1.0;
+                    h.mul(&e, &mut hcol);
+                    let hscale = hcol.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+                    for j in 0..n {
+                        for d in 0..3 {
+                            let fd = (gp[j][d] - gm[j][d]) / (2.0 * step);
+                            assert!(
+                                (fd - hcol[j][d]).abs() <= 1e-6 * hscale,
+                                "{name} {rule:?}: Hessian ({j},{d})x({i},{c}): {fd} vs {}",
+                                hcol[j][d]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(kinds.contains(&FaceKind::Extraordinary) && kinds.contains(&FaceKind::Boundary));
+}
+
+#[test]
+fn rigid_motions_of_a_curved_rest_shape_cost_nothing() {
+    for (name, mesh) in cases() {
+        let mut model = model_for(&mesh, BoundaryRule::Phantom, 5e-4);
+        model.set_gravity([0.0; 3]);
+        let x0 = model.basis.control_points.clone();
+        // an elastic energy scale: the energy of a 1 % stretch
+        let stretched: Vec<Vec3> = x0.iter().map(|p| [1.01 * p[0], p[1], p[2]]).collect();
+        let scale = model.energy(&stretched).unwrap();
+        let (a, b, c) = (0.7f64, -0.4f64, 1.1f64);
+        // rotation from Euler angles, then a translation
+        let r = nalgebra::Rotation3::from_euler_angles(a, b, c);
+        let moved: Vec<Vec3> = x0
+            .iter()
+            .map(|p| {
+                let q = r * nalgebra::Vector3::from(*p) + nalgebra::Vector3::new(0.3, -0.2, 0.05);
+                [q[0], q[1], q[2]]
+            })
+            .collect();
+        let mut g = vec![[0.0; 3]; x0.len()];
+        let e = model
+            .assemble(&moved, Want::Gradient, Some(&mut g), None)
+            .unwrap();
+        assert!(
+            e.abs() <= 1e-10 * scale,
+            "{name}: rigid-motion energy {e} vs scale {scale}"
+        );
+        let mut gs = vec![[0.0; 3]; x0.len()];
+        model
+            .assemble(&stretched, Want::Gradient, Some(&mut gs), None)
+            .unwrap();
+        let gscale = gs.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+        let gmax = g.iter().flatten().map(|v| v.abs()).fold(0.0, f64::max);
+        assert!(
+            gmax <= 1e-8 * gscale,
+            "{name}: rigid-motion gradient {gmax} vs {gscale}"
+        );
+    }
+}
+
+fn fabric(law: OrthotropicStvk, tau: f64) -> FabricMaterial {
+    FabricMaterial {
+        name: "test".into(),
+        areal_density: 0.1,
+        thickness: tau,
+        law,
+    }
+}
+
+#[test]
+fn uniaxial_svk_strip_matches_the_closed_form() {
+    // With a12 = 0 there is no Poisson coupling: a strip pulled along the warp (or weft) is in
+    // homogeneous uniaxial strain, F = a·τ·W·λ(λ² − 1)/2 with λ = 1 + Δℓ/L, on any mesh.
+    let tau = 3e-4;
+    let (w, l) = (0.05, 0.075);
+    for (angle, a) in [(90.0, 2.0e7), (0.0, 1.2e7)] {
+        let m = fabric(
+            OrthotropicStvk {
+                a11: 2.0e7,
+                a22: 1.2e7,
+                a12: 0.0,
+                g12: 1.0e6,
+            },
+            tau,
+        );
+        for mesh in [(2, 3), (8, 12), (5, 7)] {
+            let mut strip = TensileStrip::new(w, l, angle);
+            strip.mesh = mesh;
+            let dl: Vec<f64> = (1..=6).map(|i| 0.05 * l * i as f64).collect();
+            let curve = strip.run(&m, &dl).unwrap();
+            for p in &curve {
+                let lam = 1.0 + p.elongation / l;
+                let exact = a * tau * w * lam * (lam * lam - 1.0) / 2.0;
+                assert!(
+                    (p.force / exact - 1.0).abs() < 1e-6,
+                    "angle {angle} mesh {mesh:?} λ={lam}: {} vs {exact}",
+                    p.force
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn isotropic_material_gives_the_same_curve_at_every_angle() {
+    // isotropy here: a11 = a22 and G12 = a11 − a12
+    for a12 in [0.0, 4.0e6] {
+        let a11 = 1.5e7;
+        let m = fabric(
+            OrthotropicStvk {
+                a11,
+                a22: a11,
+                a12,
+                g12: a11 - a12,
+            },
+            2e-4,
+        );
+        let dl = [0.0015, 0.004, 0.0075];
+        let reference = TensileStrip::new(0.05, 0.075, 0.0).run(&m, &dl).unwrap();
+        for angle in [22.5, 45.0, 90.0] {
+            let curve = TensileStrip::new(0.05, 0.075, angle).run(&m, &dl).unwrap();
+            for (p, q) in curve.iter().zip(&reference) {
+                assert!(
+                    (p.force / q.force - 1.0).abs() < 1e-8,
+                    "a12 {a12} angle {angle}: {} vs {}",
+                    p.force,
+                    q.force
+                );
+            }
+        }
+    }
+}
