@@ -188,7 +188,7 @@ impl RestPoint {
         let (a1, a2) = (v3(&y, A1), v3(&y, A2));
         let m = a1.cross(&a2);
         let l = m.norm();
-        if !(l > 1e-300) || !l.is_finite() {
+        if !l.is_finite() || l <= 1e-300 {
             return Err(RestError::Degenerate);
         }
         let n = m / l;
@@ -202,7 +202,8 @@ impl RestPoint {
         let c2 = i12 * a1 + i22 * a2;
         let w = Vector3::new(warp[0], warp[1], warp[2]);
         let d1 = w - w.dot(&n) * n;
-        if d1.norm() <= 1e-12 * w.norm() || !(d1.norm() > 0.0) {
+        let len = d1.norm();
+        if !len.is_finite() || len <= 1e-12 * w.norm() || len == 0.0 {
             return Err(RestError::WarpAlongNormal);
         }
         let d1 = d1.normalize();

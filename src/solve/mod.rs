@@ -294,7 +294,7 @@ pub fn newton(
         }
         report.factor_seconds += tf.elapsed().as_secs_f64();
         let slope: f64 = d.iter().zip(&gf).map(|(a, b)| a * b).sum();
-        if !(slope < 0.0) {
+        if slope.is_nan() || slope >= 0.0 {
             return Err(SolveError::Stalled {
                 residual: report.residual,
             });
