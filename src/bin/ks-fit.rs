@@ -3,7 +3,9 @@
 //! Every user error is one line on stderr starting with `ks-fit: error:` and exit code 2.
 
 use clap::{Parser, Subcommand};
+use kshell::material::load_material;
 use kshell::mesh::{read_obj, shapes, write_obj, PolyMesh, Topology};
+use kshell::scene::{CantileverBend, TensileStrip};
 use kshell::subdiv::{refine_uniform, BoundaryRule, FaceKind, LimitBasis, LimitSurface};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -42,8 +44,87 @@ enum Command {
         #[arg(long)]
         write: Option<PathBuf>,
     },
+    /// Virtual ASTM D5035 strip test: prints CSV `elongation_mm,force_n`.
+    Tensile {
+        /// Material file (TOML).
+        #[arg(long)]
+        material: PathBuf,
+        /// Cut angle from the weft, degrees (0 weft, 90 warp, 45 bias).
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Strip width, mm.
+        #[arg(long)]
+        width: f64,
+        /// Gauge length, mm.
+        #[arg(long)]
+        length: f64,
+        /// Final elongation, mm.
+        #[arg(long)]
+        to: f64,
+        /// Number of equal elongation steps (rows printed).
+        #[arg(long)]
+        steps: usize,
+        /// Faces across × along, e.g. 8x12 (default: 8 across, square-ish elements).
+        #[arg(long, value_parser = parse_mesh)]
+        mesh: Option<(usize, usize)>,
+        /// Boundary treatment of the limit surface: phantom or ghost.
+        #[arg(long, default_value = "phantom")]
+        boundary: BoundaryRule,
+        /// Report each solve on stderr.
+        #[arg(short, long)]
+        verbose: bool,
+    },
+    /// Virtual ASTM D1388 cantilever: prints CSV `overhang_mm,drape_angle_deg`.
+    Bend {
+        /// Material file (TOML).
+        #[arg(long)]
+        material: PathBuf,
+        /// Cut angle from the weft, degrees.
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Overhang past the platform edge, mm.
+        #[arg(long)]
+        overhang: f64,
+        /// Strip width, mm.
+        #[arg(long, default_value_t = 25.0)]
+        width: f64,
+        /// Faces across × along, e.g. 4x16 (default: elements of about 6.25 mm).
+        #[arg(long, value_parser = parse_mesh)]
+        mesh: Option<(usize, usize)>,
+        /// Boundary treatment of the limit surface: phantom or ghost.
+        #[arg(long, default_value = "phantom")]
+        boundary: BoundaryRule,
+        /// Report the solve on stderr.
+        #[arg(short, long)]
+        verbose: bool,
+    },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+}
+
+/// "NXxNY" → (NX, NY), both at least 1.
+fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("mesh must look like 8x12 (faces across x faces along), got '{s}'");
+    let (a, b) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (nx, ny) = (
+        a.trim().parse::<usize>().map_err(|_| bad())?,
+        b.trim().parse::<usize>().map_err(|_| bad())?,
+    );
+    if nx == 0 || ny == 0 {
+        return Err(bad());
+    }
+    Ok((nx, ny))
+}
+
+/// A positive, finite number of millimetres, in metres.
+fn mm(name: &str, v: f64) -> Result<f64, String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v * 1e-3)
+    } else {
+        Err(format!(
+            "--{name} must be a positive number of millimetres, got {v}"
+        ))
+    }
 }
 
 fn main() -> ExitCode {
@@ -62,6 +143,28 @@ fn main() -> ExitCode {
             subdivide,
             write.as_deref(),
         ),
+        Command::Tensile {
+            material,
+            angle,
+            width,
+            length,
+            to,
+            steps,
+            mesh,
+            boundary,
+            verbose,
+        } => cmd_tensile(
+            &material, angle, width, length, to, steps, mesh, boundary, verbose,
+        ),
+        Command::Bend {
+            material,
+            angle,
+            overhang,
+            width,
+            mesh,
+            boundary,
+            verbose,
+        } => cmd_bend(&material, angle, overhang, width, mesh, boundary, verbose),
         Command::Demo => cmd_demo(),
     };
     match result {
@@ -141,6 +244,84 @@ fn cmd_mesh(
             print_summary(&mesh, &surface);
         }
     }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn cmd_tensile(
+    material: &std::path::Path,
+    angle: f64,
+    width: f64,
+    length: f64,
+    to: f64,
+    steps: usize,
+    mesh: Option<(usize, usize)>,
+    boundary: BoundaryRule,
+    verbose: bool,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
+    if steps == 0 {
+        return Err("--steps must be at least 1".into());
+    }
+    if !angle.is_finite() {
+        return Err(format!("--angle must be a number of degrees, got {angle}"));
+    }
+    let mut strip = TensileStrip::new(w, l, angle);
+    if let Some(m) = mesh {
+        strip.mesh = m;
+    }
+    strip.boundary = boundary;
+    let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
+    let curve = strip.run(&mat, &dl).map_err(|e| e.to_string())?;
+    println!("elongation_mm,force_n");
+    for p in &curve {
+        println!("{},{}", p.elongation * 1e3, p.force);
+        if verbose {
+            let r = &p.report;
+            eprintln!(
+                "elongation {:.4} mm: {} Newton iterations, residual {:.1e}, {:.1} ms",
+                p.elongation * 1e3,
+                r.iterations,
+                r.residual,
+                r.seconds * 1e3
+            );
+        }
+    }
+    Ok(())
+}
+
+fn cmd_bend(
+    material: &std::path::Path,
+    angle: f64,
+    overhang: f64,
+    width: f64,
+    mesh: Option<(usize, usize)>,
+    boundary: BoundaryRule,
+    verbose: bool,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
+    if !angle.is_finite() {
+        return Err(format!("--angle must be a number of degrees, got {angle}"));
+    }
+    let mut bend = CantileverBend::new(w, l, angle);
+    if let Some(m) = mesh {
+        if m.1 < 2 {
+            return Err("--mesh: a cantilever needs at least 2 faces along".into());
+        }
+        bend.mesh = m;
+    }
+    bend.boundary = boundary;
+    let r = bend.run(&mat).map_err(|e| e.to_string())?;
+    if verbose {
+        eprintln!(
+            "{} gravity steps; last solve {} Newton iterations, residual {:.1e}",
+            r.load_steps, r.report.iterations, r.report.residual
+        );
+    }
+    println!("overhang_mm,drape_angle_deg");
+    println!("{},{}", overhang, r.drape_angle_deg);
     Ok(())
 }
 

@@ -255,20 +255,37 @@ impl CantileverBend {
             source,
         })?;
         let mut x = model.basis.control_points.clone();
-        // gravity continuation: raise the load factor, halving the increment when a solve fails
-        let (mut factor, mut step, mut steps) = (0.0f64, 1.0f64, 0usize);
+        // gravity continuation: raise the load factor, halving the increment when a solve fails;
+        // each solve starts from a secant prediction through the last two equilibria
+        let (mut factor, mut step, mut steps) = (0.0f64, 0.125f64, 0usize);
+        let opts = NewtonOptions {
+            max_iterations: 30,
+            ..NewtonOptions::default()
+        };
         let mut last = SolveReport::default();
+        let mut previous: Option<(f64, Vec<Vec3>)> = None;
         while factor < 1.0 {
             let target = (factor + step).min(1.0);
             model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * target]);
             let mut trial = x.clone();
-            match newton(&model, &system, &mut trial, &NewtonOptions::default()) {
+            if let Some((f0, x0)) = &previous {
+                let r = (target - factor) / (factor - f0);
+                for (t, (a, b)) in trial.iter_mut().zip(x.iter().zip(x0)) {
+                    for c in 0..3 {
+                        t[c] = a[c] + r * (a[c] - b[c]);
+                    }
+                }
+            }
+            match newton(&model, &system, &mut trial, &opts) {
                 Ok(r) => {
-                    x = trial;
+                    previous = Some((factor, std::mem::replace(&mut x, trial)));
                     factor = target;
-                    last = r;
                     steps += 1;
-                    step *= 2.0;
+                    // grow the increment while solves stay easy
+                    if r.iterations <= 12 {
+                        step *= 2.0;
+                    }
+                    last = r;
                 }
                 Err(source) => {
                     step *= 0.5;
