@@ -139,7 +139,11 @@ pub struct ShellModel {
     /// m/s² (default (0, 0, −9.81) when gravity is on, zero otherwise)
     gravity: Vec3,
     /// ∂E_gravity/∂x_i (constant)
-    gravity_force: Vec<Vec3>,
+    gravity_gradient: Vec<Vec3>,
+    /// Dead loads on the control points, N
+    dead_load: Vec<Vec3>,
+    /// ∂E_external/∂x_i = gravity gradient − dead load (constant)
+    external_gradient: Vec<Vec3>,
     /// (ξ, weight) through the thickness
     thickness_rule: Vec<(f64, f64)>,
     pub pattern: Arc<BlockPattern>,
@@ -183,7 +187,9 @@ impl ShellModel {
             .through_thickness(thickness);
         let pattern = Arc::new(BlockPattern::from_basis(&basis));
         let mut model = Self {
-            gravity_force: vec![[0.0; 3]; basis.control_points.len()],
+            gravity_gradient: vec![[0.0; 3]; basis.control_points.len()],
+            dead_load: vec![[0.0; 3]; basis.control_points.len()],
+            external_gradient: vec![[0.0; 3]; basis.control_points.len()],
             basis,
             rest,
             law,
@@ -200,7 +206,7 @@ impl ShellModel {
     /// Sets the gravitational acceleration (m/s²), e.g. [0, 0, −9.80665], or zero.
     pub fn set_gravity(&mut self, g: Vec3) {
         self.gravity = g;
-        let f = &mut self.gravity_force;
+        let f = &mut self.gravity_gradient;
         f.iter_mut().for_each(|v| *v = [0.0; 3]);
         for (q, rest) in self.rest.iter().enumerate() {
             let (idx, w) = self.basis.stencil(q);
@@ -210,18 +216,67 @@ impl ShellModel {
                 }
             }
         }
+        self.update_external();
+    }
+
+    /// Sets dead (fixed-direction) loads on the control points, N; `load.len()` must be the
+    /// number of control points.
+    pub fn set_dead_load(&mut self, load: Vec<Vec3>) {
+        assert_eq!(load.len(), self.num_nodes(), "one load per control point");
+        self.dead_load = load;
+        self.update_external();
+    }
+
+    fn update_external(&mut self) {
+        for ((e, g), f) in self
+            .external_gradient
+            .iter_mut()
+            .zip(&self.gravity_gradient)
+            .zip(&self.dead_load)
+        {
+            *e = std::array::from_fn(|c| g[c] - f[c]);
+        }
     }
 
     pub fn gravity(&self) -> Vec3 {
         self.gravity
     }
 
-    /// Constant external force of gravity on each control point (−∂E_gravity/∂x).
-    pub fn gravity_load(&self) -> Vec<Vec3> {
-        self.gravity_force
+    /// Constant external force on each control point (gravity and dead loads).
+    pub fn external_load(&self) -> Vec<Vec3> {
+        self.external_gradient
             .iter()
             .map(|f| [-f[0], -f[1], -f[2]])
             .collect()
+    }
+
+    /// Consistent nodal loads of a force per unit rest length `per_length` (N/m) applied along
+    /// the limit curve v = `v` (0 or 1) of `faces`.
+    pub fn edge_load(&self, faces: &[usize], v: f64, per_length: Vec3) -> Vec<Vec3> {
+        let surface = self.basis.surface();
+        let rule = GaussLegendre::new(4)
+            .expect("4 is a valid rule")
+            .on_interval(0.0, 1.0);
+        let x = &self.basis.control_points;
+        let mut f = vec![[0.0; 3]; self.num_nodes()];
+        for &face in faces {
+            let uvs: Vec<[f64; 2]> = rule.iter().map(|&(u, _)| [u, v]).collect();
+            let Ok(stencils) = surface.stencils(face, &uvs) else {
+                continue;
+            };
+            for (s, &(_, w)) in stencils.iter().zip(&rule) {
+                let ds = {
+                    let t = s.apply(x).d[1];
+                    (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt()
+                };
+                for (&i, wi) in s.indices.iter().zip(&s.weights) {
+                    for c in 0..3 {
+                        f[i as usize][c] += w * ds * wi[0] * per_length[c];
+                    }
+                }
+            }
+        }
+        f
     }
 
     pub fn num_nodes(&self) -> usize {
@@ -297,13 +352,13 @@ impl ShellModel {
         let mut grad = grad;
         let mut hess = hess;
         if let Some(g) = grad.as_deref_mut() {
-            g.copy_from_slice(&self.gravity_force);
+            g.copy_from_slice(&self.external_gradient);
         }
         if let Some(h) = hess.as_deref_mut() {
             h.fill_zero();
         }
         let mut energy: f64 = self
-            .gravity_force
+            .external_gradient
             .iter()
             .zip(x)
             .map(|(f, p)| f[0] * p[0] + f[1] * p[1] + f[2] * p[2])

@@ -7,8 +7,10 @@
 use crate::assembly::{ModelError, ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::rectangular_grid;
-use crate::solve::{newton, FreeSystem, NewtonOptions, SolveError, SolveReport};
-use crate::subdiv::{BasisBuildError, BasisOptions, BoundaryRule, LimitBasis, LimitSurface};
+use crate::solve::{
+    continuation, newton, FreeSystem, NewtonOptions, Slave, SolveError, SolveReport,
+};
+use crate::subdiv::{BasisBuildError, BasisOptions, BoundaryRule, LimitBasis};
 use crate::Vec3;
 use std::sync::Arc;
 
@@ -81,6 +83,120 @@ fn build_model(
     )?)
 }
 
+/// How a jaw holds the end of a strip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hold {
+    /// The limit edge follows the jaw; the slope across it is free (tensile jaws).
+    Position,
+    /// The limit edge and the tangent across it keep their rest values (a clamp on a platform).
+    PositionAndSlope,
+}
+
+/// Constraints holding the grid edge at row `row` (0 or ny) of a strip, the strip lying on the
+/// side `inward` (+1 or −1) of it. With the phantom rule the limit edge is the boundary control
+/// row, so holding it means fixing that row (and the next, for the slope, which also pins the
+/// curvature across the edge to zero). With the ghost rule each column (ghost G, boundary P₀,
+/// first interior P₁) satisfies (G + 4P₀ + P₁)/6 = edge and, for the slope, P₁ − G = rest value:
+/// P₀ and G become affine functions of P₁, and the curvature G − 2P₀ + P₁ stays free.
+struct EdgeClamp {
+    /// DOFs held at rest position + shift.
+    fixed: Vec<usize>,
+    /// Affine constraints at zero shift.
+    slaves: Vec<Slave>,
+    /// ∂offset/∂shift component for each slave (the jaw moves along y only).
+    offset_rate: Vec<f64>,
+    /// ∂x_dof/∂(jaw displacement along y) at fixed masters: the reaction is Σ g · rate.
+    motion: Vec<(usize, f64)>,
+}
+
+fn edge_clamp(
+    model: &ShellModel,
+    rule: BoundaryRule,
+    (nx, ny): (usize, usize),
+    (hx, hy): (f64, f64),
+    row: i64,
+    inward: i64,
+    hold: Hold,
+) -> Result<EdgeClamp, SceneError> {
+    let x0 = &model.basis.control_points;
+    let mut lattice = std::collections::HashMap::new();
+    for (v, p) in x0.iter().enumerate() {
+        lattice.insert(((p[0] / hx).round() as i64, (p[1] / hy).round() as i64), v);
+    }
+    let node = |i: i64, j: i64| {
+        lattice.get(&(i, j)).copied().ok_or_else(|| {
+            SceneError::Input(format!("internal: no control point at lattice ({i}, {j})"))
+        })
+    };
+    let mut clamp = EdgeClamp {
+        fixed: Vec::new(),
+        slaves: Vec::new(),
+        offset_rate: Vec::new(),
+        motion: Vec::new(),
+    };
+    let _ = ny;
+    match rule {
+        BoundaryRule::Phantom => {
+            let rows: &[i64] = match hold {
+                Hold::Position => &[0],
+                Hold::PositionAndSlope => &[0, 1],
+            };
+            for &r in rows {
+                for i in 0..=nx as i64 {
+                    let v = node(i, row + r * inward)?;
+                    clamp.fixed.extend(3 * v..3 * v + 3);
+                    clamp.motion.push((3 * v + 1, 1.0));
+                }
+            }
+        }
+        BoundaryRule::Ghost => {
+            for i in -1..=nx as i64 + 1 {
+                let (g, p0, p1) = (
+                    node(i, row - inward)?,
+                    node(i, row)?,
+                    node(i, row + inward)?,
+                );
+                for c in 0..3 {
+                    let (xg, xp0, xp1) = (x0[g][c], x0[p0][c], x0[p1][c]);
+                    let edge = (xg + 4.0 * xp0 + xp1) / 6.0;
+                    let rate = if c == 1 { 1.5 } else { 0.0 };
+                    match hold {
+                        Hold::Position => {
+                            clamp.slaves.push(Slave {
+                                dof: 3 * p0 + c,
+                                masters: vec![(3 * g + c, -0.25), (3 * p1 + c, -0.25)],
+                                offset: 1.5 * edge,
+                            });
+                            clamp.offset_rate.push(rate);
+                        }
+                        Hold::PositionAndSlope => {
+                            clamp.slaves.push(Slave {
+                                dof: 3 * g + c,
+                                masters: vec![(3 * p1 + c, 1.0)],
+                                offset: xg - xp1,
+                            });
+                            clamp.offset_rate.push(0.0);
+                            clamp.slaves.push(Slave {
+                                dof: 3 * p0 + c,
+                                masters: vec![(3 * p1 + c, -0.5)],
+                                offset: xp0 + 0.5 * xp1,
+                            });
+                            clamp.offset_rate.push(rate);
+                        }
+                    }
+                }
+                clamp.motion.push((3 * p0 + 1, 1.5));
+            }
+        }
+    }
+    Ok(clamp)
+}
+
+/// Grid spacing of a strip mesh.
+fn spacing(width: f64, length: f64, (nx, ny): (usize, usize)) -> (f64, f64) {
+    (width / nx as f64, length / ny as f64)
+}
+
 /// ASTM D5035 strip: width × gauge length, clamped along both ends, one clamp pulled along y.
 #[derive(Clone, Debug)]
 pub struct TensileStrip {
@@ -133,37 +249,57 @@ impl TensileStrip {
             self.boundary,
         )?;
         let nn = model.num_nodes();
-        // the jaws hold the end rows of the grid: with the phantom rule the limit edge is that row
-        let bottom: Vec<usize> = (0..=nx).collect();
-        let top: Vec<usize> = (0..=nx).map(|i| ny * (nx + 1) + i).collect();
+        let h = spacing(self.width, self.length, self.mesh);
+        let bottom = edge_clamp(&model, self.boundary, self.mesh, h, 0, 1, Hold::Position)?;
+        let top = edge_clamp(
+            &model,
+            self.boundary,
+            self.mesh,
+            h,
+            ny as i64,
+            -1,
+            Hold::Position,
+        )?;
         let mut fixed = vec![false; 3 * nn];
-        for &v in bottom.iter().chain(&top) {
-            fixed[3 * v..3 * v + 3].iter_mut().for_each(|f| *f = true);
+        for &d in bottom.fixed.iter().chain(&top.fixed) {
+            fixed[d] = true;
         }
-        let system = FreeSystem::new(&model, &fixed).map_err(|source| SceneError::Solve {
-            stage: "set-up".into(),
-            source,
+        let slaves: Vec<Slave> = bottom.slaves.iter().chain(&top.slaves).cloned().collect();
+        let base: Vec<f64> = slaves.iter().map(|s| s.offset).collect();
+        let rate: Vec<f64> = std::iter::repeat_n(0.0, bottom.slaves.len())
+            .chain(top.offset_rate.iter().copied())
+            .collect();
+        let mut system = FreeSystem::with_slaves(&model, &fixed, slaves).map_err(|source| {
+            SceneError::Solve {
+                stage: "set-up".into(),
+                source,
+            }
         })?;
-        let mut x = model.basis.control_points.clone();
+        let rest = model.basis.control_points.clone();
+        let mut x = rest.clone();
         let mut grad = vec![[0.0; 3]; nn];
         let mut current = 0.0;
         let mut out = Vec::with_capacity(elongations.len());
+        let _ = nx;
         for &dl in elongations {
             if !dl.is_finite() {
                 return Err(SceneError::Input(format!(
                     "elongation must be finite, got {dl}"
                 )));
             }
+            // predictor: stretch the last equilibrium affinely to the new jaw position
             let s = (self.length + dl) / (self.length + current);
             for p in &mut x {
                 p[1] *= s;
             }
-            for &v in &top {
-                x[v][1] = self.length + dl;
+            for &d in &bottom.fixed {
+                x[d / 3][d % 3] = rest[d / 3][d % 3];
             }
-            for &v in &bottom {
-                x[v][1] = 0.0;
+            for &d in &top.fixed {
+                x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
             }
+            let offsets: Vec<f64> = base.iter().zip(&rate).map(|(b, r)| b + r * dl).collect();
+            system.set_offsets(&offsets);
             let report =
                 newton(&model, &system, &mut x, &NewtonOptions::default()).map_err(|source| {
                     SceneError::Solve {
@@ -177,7 +313,11 @@ impl TensileStrip {
                     stage: "reaction".into(),
                     source: SolveError::StartOutOfDomain(e.to_string()),
                 })?;
-            let force: f64 = top.iter().map(|&v| grad[v][1]).sum();
+            let force: f64 = top
+                .motion
+                .iter()
+                .map(|&(d, r)| r * grad[d / 3][d % 3])
+                .sum();
             out.push(TensilePoint {
                 elongation: dl,
                 force,
@@ -190,8 +330,8 @@ impl TensileStrip {
 }
 
 /// ASTM D1388 cantilever: a strip of `width` overhanging the platform edge by `overhang`, the
-/// part on the platform clamped (the first two control rows fixed flat, which holds the edge
-/// position and its slope), sagging under gravity.
+/// part on the platform clamped (the edge keeps its position and its horizontal slope; see
+/// [`BoundaryRule`] for how each rule does it), sagging under gravity.
 #[derive(Clone, Debug)]
 pub struct CantileverBend {
     /// m
@@ -246,63 +386,35 @@ impl CantileverBend {
             self.boundary,
         )?;
         let nn = model.num_nodes();
+        let h = spacing(self.width, self.overhang, self.mesh);
+        let clamp = edge_clamp(
+            &model,
+            self.boundary,
+            self.mesh,
+            h,
+            0,
+            1,
+            Hold::PositionAndSlope,
+        )?;
         let mut fixed = vec![false; 3 * nn];
-        for v in 0..2 * (nx + 1) {
-            fixed[3 * v..3 * v + 3].iter_mut().for_each(|f| *f = true);
+        for &d in &clamp.fixed {
+            fixed[d] = true;
         }
-        let system = FreeSystem::new(&model, &fixed).map_err(|source| SceneError::Solve {
-            stage: "set-up".into(),
-            source,
+        let system = FreeSystem::with_slaves(&model, &fixed, clamp.slaves).map_err(|source| {
+            SceneError::Solve {
+                stage: "set-up".into(),
+                source,
+            }
         })?;
         let mut x = model.basis.control_points.clone();
-        // gravity continuation: raise the load factor, halving the increment when a solve fails;
-        // each solve starts from a secant prediction through the last two equilibria
-        let (mut factor, mut step, mut steps) = (0.0f64, 0.125f64, 0usize);
-        let opts = NewtonOptions {
-            max_iterations: 30,
-            ..NewtonOptions::default()
-        };
-        let mut last = SolveReport::default();
-        let mut previous: Option<(f64, Vec<Vec3>)> = None;
-        while factor < 1.0 {
-            let target = (factor + step).min(1.0);
-            model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * target]);
-            let mut trial = x.clone();
-            if let Some((f0, x0)) = &previous {
-                let r = (target - factor) / (factor - f0);
-                for (t, (a, b)) in trial.iter_mut().zip(x.iter().zip(x0)) {
-                    for c in 0..3 {
-                        t[c] = a[c] + r * (a[c] - b[c]);
-                    }
-                }
-            }
-            match newton(&model, &system, &mut trial, &opts) {
-                Ok(r) => {
-                    previous = Some((factor, std::mem::replace(&mut x, trial)));
-                    factor = target;
-                    steps += 1;
-                    // grow the increment while solves stay easy
-                    if r.iterations <= 12 {
-                        step *= 2.0;
-                    }
-                    last = r;
-                }
-                Err(source) => {
-                    step *= 0.5;
-                    if step < 1e-4 {
-                        return Err(SceneError::Solve {
-                            stage: format!("gravity factor {target:.4}"),
-                            source,
-                        });
-                    }
-                }
-            }
-        }
-        let surface = LimitSurface::new(
-            &rectangular_grid(self.width, self.overhang, nx, ny),
-            self.boundary,
-        )
-        .map_err(|e| SceneError::Basis(e.into()))?;
+        let cont = continuation(&mut model, &system, &mut x, |m, t| {
+            m.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * t])
+        })
+        .map_err(|(t, source)| SceneError::Solve {
+            stage: format!("gravity factor {t:.4}"),
+            source,
+        })?;
+        let surface = model.basis.surface();
         let mid = nx / 2;
         let (face_edge, u_edge) = if nx % 2 == 0 { (mid, 0.0) } else { (mid, 0.5) };
         let eval = |face: usize, u: f64, v: f64| -> Result<Vec3, SceneError> {
@@ -317,8 +429,8 @@ impl CantileverBend {
         Ok(BendResult {
             drape_angle_deg: angle,
             tip,
-            load_steps: steps,
-            report: last,
+            load_steps: cont.steps,
+            report: cont.last,
         })
     }
 }

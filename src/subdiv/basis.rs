@@ -44,6 +44,7 @@ pub struct LimitBasis {
     /// Quadrature weight × parametric area of each point (parametric area is 1 per face).
     pub quad_weight: Vec<f64>,
     pub stencils: StencilTable,
+    surface: std::sync::Arc<LimitSurface>,
 }
 
 /// Building a basis failed.
@@ -96,7 +97,13 @@ impl LimitBasis {
             face_uv,
             quad_weight,
             stencils,
+            surface: std::sync::Arc::new(surface.clone()),
         })
+    }
+
+    /// The limit surface the basis samples (to evaluate anywhere else).
+    pub fn surface(&self) -> &LimitSurface {
+        &self.surface
     }
 
     /// Number of quadrature points over the whole surface.
