@@ -202,9 +202,16 @@ fn uniaxial_svk_strip_matches_the_closed_form() {
             },
             tau,
         );
-        for mesh in [(2, 3), (8, 12), (5, 7)] {
+        for (mesh, rule) in [
+            ((2, 3), BoundaryRule::Phantom),
+            ((8, 12), BoundaryRule::Phantom),
+            ((5, 7), BoundaryRule::Phantom),
+            ((2, 3), BoundaryRule::Ghost),
+            ((8, 12), BoundaryRule::Ghost),
+        ] {
             let mut strip = TensileStrip::new(w, l, angle);
             strip.mesh = mesh;
+            strip.boundary = rule;
             let dl: Vec<f64> = (1..=6).map(|i| 0.05 * l * i as f64).collect();
             let curve = strip.run(&m, &dl).unwrap();
             for p in &curve {
@@ -212,7 +219,7 @@ fn uniaxial_svk_strip_matches_the_closed_form() {
                 let exact = a * tau * w * lam * (lam * lam - 1.0) / 2.0;
                 assert!(
                     (p.force / exact - 1.0).abs() < 1e-6,
-                    "angle {angle} mesh {mesh:?} λ={lam}: {} vs {exact}",
+                    "angle {angle} mesh {mesh:?} {rule:?} λ={lam}: {} vs {exact}",
                     p.force
                 );
             }

@@ -340,7 +340,13 @@ pub struct CantileverBend {
     pub overhang: f64,
     pub angle_deg: f64,
     pub mesh: (usize, usize),
+    /// Default: ghost, whose clamp leaves the curvature at the edge free (see `EdgeClamp`);
+    /// the phantom clamp forces it to zero and converges at about first order.
     pub boundary: BoundaryRule,
+    /// Self-weight on (the ASTM test) or off.
+    pub gravity: bool,
+    /// Total dead force on the free edge, spread uniformly along it, N (zero for ASTM D1388).
+    pub tip_force: Vec3,
 }
 
 /// The measured bend.
@@ -364,7 +370,9 @@ impl CantileverBend {
             overhang,
             angle_deg,
             mesh: (nx, ny),
-            boundary: BoundaryRule::Phantom,
+            boundary: BoundaryRule::Ghost,
+            gravity: true,
+            tip_force: [0.0; 3],
         }
     }
 
@@ -407,11 +415,16 @@ impl CantileverBend {
             }
         })?;
         let mut x = model.basis.control_points.clone();
+        let tip_faces: Vec<usize> = ((ny - 1) * nx..ny * nx).collect();
+        let per_length = self.tip_force.map(|f| f / self.width);
+        let tip_load = model.edge_load(&tip_faces, 1.0, per_length);
+        let g = if self.gravity { STANDARD_GRAVITY } else { 0.0 };
         let cont = continuation(&mut model, &system, &mut x, |m, t| {
-            m.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * t])
+            m.set_gravity([0.0, 0.0, -g * t]);
+            m.set_dead_load(tip_load.iter().map(|f| f.map(|c| c * t)).collect());
         })
         .map_err(|(t, source)| SceneError::Solve {
-            stage: format!("gravity factor {t:.4}"),
+            stage: format!("load factor {t:.4}"),
             source,
         })?;
         let surface = model.basis.surface();
