@@ -155,3 +155,112 @@ fn demo_runs_and_checks_the_strip_area() {
     assert!(out.contains("strip 50x75 mm"), "{out}");
     assert!(out.contains("relative error"), "{out}");
 }
+
+fn material_file(name: &str, extra: &str) -> String {
+    temp_file(
+        name,
+        &format!(
+            "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\na12_pa = 0\ng12_pa = 2e6\n{extra}"
+        ),
+    )
+}
+
+#[test]
+fn tensile_prints_the_documented_csv() {
+    let m = material_file("tensile.toml", "");
+    let (rc, out, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "90",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "3",
+        "--steps",
+        "3",
+        "--mesh",
+        "4x6",
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "elongation_mm,force_n");
+    assert_eq!(lines.len(), 4);
+    // a12 = 0, warp along the axis: F = a11 τ W λ(λ² − 1)/2
+    for (i, line) in lines[1..].iter().enumerate() {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        assert!((v[0] - (i + 1) as f64).abs() < 1e-12);
+        let lam = 1.0 + v[0] / 75.0;
+        let exact = 1e8 * 2e-4 * 0.05 * lam * (lam * lam - 1.0) / 2.0;
+        assert!((v[1] / exact - 1.0).abs() < 1e-6, "{line}");
+    }
+}
+
+#[test]
+fn bend_prints_one_row() {
+    let m = material_file("bend.toml", "");
+    let (rc, out, err) = ks_fit(&[
+        "bend",
+        "--material",
+        &m,
+        "--angle",
+        "90",
+        "--overhang",
+        "40",
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "overhang_mm,drape_angle_deg");
+    let v: Vec<f64> = lines[1].split(',').map(|x| x.parse().unwrap()).collect();
+    assert_eq!(v[0], 40.0);
+    assert!(v[1] > 0.0 && v[1] < 90.0, "{out}");
+}
+
+#[test]
+fn scene_commands_reject_bad_input_with_exit_code_2() {
+    let good = material_file("good.toml", "");
+    let unknown = material_file("unknown.toml", "colour = \"red\"\n");
+    let base = [
+        "--angle", "0", "--width", "50", "--length", "75", "--to", "3", "--steps", "2",
+    ];
+    let run = |extra: &[&str], mat: &str| {
+        let mut args = vec!["tensile", "--material", mat];
+        args.extend_from_slice(&base);
+        args.extend_from_slice(extra);
+        ks_fit(&args)
+    };
+    let (rc, _, err) = run(&[], &unknown);
+    assert_eq!(rc, 2);
+    assert!(
+        err.contains("unknown.toml:8: unknown field `colour`"),
+        "{err}"
+    );
+    let (rc, _, err) = run(&[], "no/such/material.toml");
+    assert_eq!(rc, 2);
+    assert!(
+        err.contains("no/such/material.toml: cannot read file"),
+        "{err}"
+    );
+    let (rc, _, err) = run(&["--mesh", "8by12"], &good);
+    assert_eq!(rc, 2);
+    assert!(err.contains("mesh must look like 8x12"), "{err}");
+    let (rc, _, err) = run(&["--width", "-5"], &good);
+    assert_eq!(rc, 2, "{err}");
+    let (rc, _, err) = run(&["--steps", "0"], &good);
+    assert_eq!(rc, 2, "{err}");
+    assert!(!err.contains("panicked"));
+    let (rc, _, err) = ks_fit(&[
+        "bend",
+        "--material",
+        &good,
+        "--angle",
+        "0",
+        "--overhang",
+        "0",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("--overhang must be a positive"), "{err}");
+}

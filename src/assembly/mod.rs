@@ -147,6 +147,29 @@ pub struct ShellModel {
     /// (ξ, weight) through the thickness
     thickness_rule: Vec<(f64, f64)>,
     pub pattern: Arc<BlockPattern>,
+    /// Sorted control points touched by each face's Gauss points.
+    face_nodes: Vec<Vec<u32>>,
+    /// Global block of each pair (a ≤ b) of a face's nodes, packed upper triangle.
+    face_blocks: Vec<Vec<u32>>,
+    /// Position of every stencil entry in its face's node list (aligned with the stencil table).
+    local_index: Vec<u16>,
+}
+
+/// Number of fixed face groups assembled in parallel (fixed so that sums are reproducible).
+pub const CHUNKS: usize = 8;
+
+/// Per-group partial sums.
+struct Accumulator {
+    energy: f64,
+    grad: Vec<Vec3>,
+    blocks: Vec<Matrix3<f64>>,
+}
+
+/// Reused buffers of one face's Hessian.
+#[derive(Default)]
+struct FaceScratch {
+    r: Vec<[Matrix3<f64>; 5]>,
+    local: Vec<Matrix3<f64>>,
 }
 
 /// Setting up a model failed.
@@ -186,7 +209,35 @@ impl ShellModel {
             .expect("3 is a valid rule")
             .through_thickness(thickness);
         let pattern = Arc::new(BlockPattern::from_basis(&basis));
+        let npf = basis.points_per_face;
+        let mut face_nodes = Vec::with_capacity(basis.num_faces);
+        let mut face_blocks = Vec::with_capacity(basis.num_faces);
+        let mut local_index = vec![0u16; basis.stencils.indices.len()];
+        for face in 0..basis.num_faces {
+            let mut nodes: Vec<u32> = (face * npf..(face + 1) * npf)
+                .flat_map(|q| basis.stencil(q).0.iter().copied())
+                .collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            for q in face * npf..(face + 1) * npf {
+                let off = basis.stencils.offsets[q] as usize;
+                for (k, i) in basis.stencil(q).0.iter().enumerate() {
+                    local_index[off + k] = nodes.binary_search(i).unwrap_or(0) as u16;
+                }
+            }
+            let mut blocks = Vec::with_capacity(nodes.len() * (nodes.len() + 1) / 2);
+            for (a, &i) in nodes.iter().enumerate() {
+                for &j in &nodes[a..] {
+                    blocks.push(pattern.find(i, j).unwrap_or(0) as u32);
+                }
+            }
+            face_nodes.push(nodes);
+            face_blocks.push(blocks);
+        }
         let mut model = Self {
+            face_nodes,
+            face_blocks,
+            local_index,
             gravity_gradient: vec![[0.0; 3]; basis.control_points.len()],
             dead_load: vec![[0.0; 3]; basis.control_points.len()],
             external_gradient: vec![[0.0; 3]; basis.control_points.len()],
@@ -291,7 +342,15 @@ impl ShellModel {
         want: Want,
     ) -> Result<(f64, YVec, Option<YMat>), OutOfDomain> {
         let rest = &self.rest[q];
-        let (m, b) = rest.strains(y);
+        if want == Want::Energy {
+            let (em, eb) = rest.strain_values(y);
+            let mut energy = 0.0;
+            for &(xi, w) in &self.thickness_rule {
+                energy += w * self.law.response(&(em + xi * eb))?.psi;
+            }
+            return Ok((rest.d_area * energy, YVec::zeros(), None));
+        }
+        let (m, b) = rest.strains(y, want == Want::Hessian);
         let em = Vector3::from(m.value);
         let eb = Vector3::from(b.value);
         let mut energy = 0.0;
@@ -341,7 +400,12 @@ impl ShellModel {
     }
 
     /// Assembles the energy and, as asked, the gradient (over all nodes, into `grad`) and the
-    /// Hessian (into `hess`). Gravity is included.
+    /// Hessian (into `hess`). Gravity and dead loads are included.
+    ///
+    /// Faces are processed in [`CHUNKS`] fixed contiguous groups in parallel, each group
+    /// accumulating into its own arrays, which are then summed in group order: the result does
+    /// not depend on the number of threads. Within a face, Gauss-point Hessians are summed into
+    /// a dense face block first and scattered once.
     pub fn assemble(
         &self,
         x: &[Vec3],
@@ -349,6 +413,43 @@ impl ShellModel {
         grad: Option<&mut [Vec3]>,
         hess: Option<&mut BlockMatrix>,
     ) -> Result<f64, OutOfDomain> {
+        use rayon::prelude::*;
+        let nf = self.basis.num_faces;
+        let chunks = CHUNKS.min(nf.max(1));
+        let nn = self.num_nodes();
+        let nb = self.pattern.num_blocks();
+        let want_g = grad.is_some() && want != Want::Energy;
+        let want_h = hess.is_some() && want == Want::Hessian;
+        let parts: Vec<Result<Accumulator, OutOfDomain>> = (0..chunks)
+            .into_par_iter()
+            .map(|c| {
+                let faces = c * nf / chunks..(c + 1) * nf / chunks;
+                let mut acc = Accumulator {
+                    energy: 0.0,
+                    grad: if want_g {
+                        vec![[0.0; 3]; nn]
+                    } else {
+                        Vec::new()
+                    },
+                    blocks: if want_h {
+                        vec![Matrix3::zeros(); nb]
+                    } else {
+                        Vec::new()
+                    },
+                };
+                let mut scratch = FaceScratch::default();
+                for face in faces {
+                    self.face_terms(face, x, want, &mut acc, &mut scratch)?;
+                }
+                Ok(acc)
+            })
+            .collect();
+        let mut energy: f64 = self
+            .external_gradient
+            .iter()
+            .zip(x)
+            .map(|(f, p)| f[0] * p[0] + f[1] * p[1] + f[2] * p[2])
+            .sum();
         let mut grad = grad;
         let mut hess = hess;
         if let Some(g) = grad.as_deref_mut() {
@@ -357,15 +458,48 @@ impl ShellModel {
         if let Some(h) = hess.as_deref_mut() {
             h.fill_zero();
         }
-        let mut energy: f64 = self
-            .external_gradient
-            .iter()
-            .zip(x)
-            .map(|(f, p)| f[0] * p[0] + f[1] * p[1] + f[2] * p[2])
-            .sum();
-        let mut r = vec![[Matrix3::<f64>::zeros(); 5]; 64];
-        for q in 0..self.basis.num_points() {
+        for part in parts {
+            let part = part?;
+            energy += part.energy;
+            if let (Some(g), true) = (grad.as_deref_mut(), want_g) {
+                for (a, b) in g.iter_mut().zip(&part.grad) {
+                    for k in 0..3 {
+                        a[k] += b[k];
+                    }
+                }
+            }
+            if let (Some(h), true) = (hess.as_deref_mut(), want_h) {
+                for (a, b) in h.blocks.iter_mut().zip(&part.blocks) {
+                    *a += b;
+                }
+            }
+        }
+        Ok(energy)
+    }
+
+    /// Adds one face's energy, gradient and Hessian to `acc`.
+    fn face_terms(
+        &self,
+        face: usize,
+        x: &[Vec3],
+        want: Want,
+        acc: &mut Accumulator,
+        s: &mut FaceScratch,
+    ) -> Result<(), OutOfDomain> {
+        let npf = self.basis.points_per_face;
+        let nodes = &self.face_nodes[face];
+        let n = nodes.len();
+        let tri = n * (n + 1) / 2;
+        let want_h = want == Want::Hessian && !acc.blocks.is_empty();
+        let want_g = want != Want::Energy && !acc.grad.is_empty();
+        if want_h {
+            s.local.clear();
+            s.local.resize(tri, Matrix3::zeros());
+        }
+        for q in face * npf..(face + 1) * npf {
             let (idx, w) = self.basis.stencil(q);
+            let off = self.basis.stencils.offsets[q] as usize;
+            let local = &self.local_index[off..off + idx.len()];
             let mut d = [[0.0; 3]; 6];
             for (&i, wi) in idx.iter().zip(w) {
                 let p = x[i as usize];
@@ -377,50 +511,57 @@ impl ShellModel {
             }
             let y = kinematic_vector(&d);
             let (e, gy, hy) = self.point_terms(q, &y, want)?;
-            energy += e;
-            if let Some(g) = grad.as_deref_mut() {
+            acc.energy += e;
+            if want_g {
                 for (&i, wi) in idx.iter().zip(w) {
                     for k in 0..5 {
                         for c in 0..3 {
-                            g[i as usize][c] += wi[k + 1] * gy[3 * k + c];
+                            acc.grad[i as usize][c] += wi[k + 1] * gy[3 * k + c];
                         }
                     }
                 }
             }
-            if let (Some(h), Some(hy)) = (hess.as_deref_mut(), hy) {
-                let n = idx.len();
-                if r.len() < n {
-                    r.resize(n, [Matrix3::zeros(); 5]);
-                }
-                // R_il = Σ_k W_ik H_kl
-                for a in 0..n {
+            if let (true, Some(hy)) = (want_h, hy) {
+                let m = idx.len();
+                s.r.clear();
+                s.r.resize(m, [Matrix3::zeros(); 5]);
+                // R_al = Σ_k W_ak H_kl  (3 × 3 blocks)
+                let blocks: [[Matrix3<f64>; 5]; 5] = std::array::from_fn(|k| {
+                    std::array::from_fn(|l| hy.fixed_view::<3, 3>(3 * k, 3 * l).into_owned())
+                });
+                for a in 0..m {
                     for l in 0..5 {
-                        let mut acc = Matrix3::zeros();
+                        let mut r = Matrix3::zeros();
                         for k in 0..5 {
-                            let s = w[a][k + 1];
-                            if s != 0.0 {
-                                acc += s * hy.fixed_view::<3, 3>(3 * k, 3 * l);
+                            let c = w[a][k + 1];
+                            if c != 0.0 {
+                                r += c * blocks[k][l];
                             }
                         }
-                        r[a][l] = acc;
+                        s.r[a][l] = r;
                     }
                 }
-                for a in 0..n {
-                    for bb in a..n {
+                // H_ab = Σ_l R_al W_bl, into the face's packed upper triangle
+                for a in 0..m {
+                    let la = local[a] as usize;
+                    for b in a..m {
                         let mut blk = Matrix3::zeros();
                         for l in 0..5 {
-                            blk += w[bb][l + 1] * r[a][l];
+                            blk += w[b][l + 1] * s.r[a][l];
                         }
-                        let (i, j) = (idx[a], idx[bb]);
-                        // stencils are sorted by index, so i ≤ j
-                        if let Some(k) = h.pattern.find(i, j) {
-                            h.blocks[k] += blk;
-                        }
+                        let lb = local[b] as usize;
+                        // stencil and face node lists are both sorted, so la ≤ lb
+                        s.local[la * n - la * (la + 1) / 2 + lb] += blk;
                     }
                 }
             }
         }
-        Ok(energy)
+        if want_h {
+            for (k, blk) in self.face_blocks[face].iter().zip(&s.local) {
+                acc.blocks[*k as usize] += blk;
+            }
+        }
+        Ok(())
     }
 
     /// Total energy.

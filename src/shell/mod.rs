@@ -44,8 +44,8 @@ impl StrainJet {
         }
     }
 
-    /// The jet of T·E (a fixed linear map of the components).
-    pub fn mapped(&self, t: &Matrix3<f64>) -> StrainJet {
+    /// The jet of T·E (a fixed linear map of the components); Hessians only if asked.
+    pub fn mapped(&self, t: &Matrix3<f64>, hessian: bool) -> StrainJet {
         let mut out = StrainJet::zero();
         for k in 0..3 {
             for j in 0..3 {
@@ -53,7 +53,9 @@ impl StrainJet {
                 if a != 0.0 {
                     out.value[k] += a * self.value[j];
                     out.grad[k] += a * self.grad[j];
-                    out.hess[k] += a * self.hess[j];
+                    if hessian {
+                        out.hess[k] += a * self.hess[j];
+                    }
                 }
             }
         }
@@ -75,7 +77,7 @@ fn add_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
 }
 
 /// Membrane strain ε_αβ = ½(a_α·a_β − A_αβ) and its derivatives; `rest` is (A₁₁, A₂₂, A₁₂).
-pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
+pub fn membrane(y: &YVec, rest: [f64; 3], hessian: bool) -> StrainJet {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let mut j = StrainJet::zero();
     j.value = [
@@ -87,6 +89,9 @@ pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
     j.grad[1].fixed_rows_mut::<3>(A2).copy_from(&a2);
     j.grad[2].fixed_rows_mut::<3>(A1).copy_from(&(0.5 * a2));
     j.grad[2].fixed_rows_mut::<3>(A2).copy_from(&(0.5 * a1));
+    if !hessian {
+        return j;
+    }
     let id = Matrix3::identity();
     set_block(&mut j.hess[0], A1, A1, &id);
     set_block(&mut j.hess[1], A2, A2, &id);
@@ -106,7 +111,7 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 /// ∂b/∂m = v = (h − (h·n) n)/l, ∂²b/∂m² = −(h nᵀ + n hᵀ + (h·n)(I − 3 n nᵀ))/l² and
 /// ∂²b/∂m∂h = (I − n nᵀ)/l; the chain rule through m (∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]×, and
 /// ∂²m/∂a₁∂a₂ contracted with v = −[v]×) gives the rest.
-pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
+pub fn bending(y: &YVec, rest: [f64; 3], hessian: bool) -> StrainJet {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let m = a1.cross(&a2);
     let l = m.norm();
@@ -129,6 +134,9 @@ pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
         g.fixed_rows_mut::<3>(A1).copy_from(&(-a2.cross(&v)));
         g.fixed_rows_mut::<3>(A2).copy_from(&(-v.cross(&a1)));
         g.fixed_rows_mut::<3>(hk).copy_from(&(-n));
+        if !hessian {
+            continue;
+        }
         let hs = &mut j.hess[k];
         let b11 = s2 * mm * s2; // −(−[a₂]× M [a₂]×)
         let b22 = s1 * mm * s1;
@@ -229,12 +237,30 @@ impl RestPoint {
         })
     }
 
-    /// Membrane and bending strain jets in the warp/weft frame.
-    pub fn strains(&self, y: &YVec) -> (StrainJet, StrainJet) {
+    /// Membrane and bending strain jets in the warp/weft frame (Hessians only if asked).
+    pub fn strains(&self, y: &YVec, hessian: bool) -> (StrainJet, StrainJet) {
         (
-            membrane(y, self.metric).mapped(&self.to_material),
-            bending(y, self.curvature).mapped(&self.to_material),
+            membrane(y, self.metric, hessian).mapped(&self.to_material, hessian),
+            bending(y, self.curvature, hessian).mapped(&self.to_material, hessian),
         )
+    }
+
+    /// Membrane and bending strains alone, in the warp/weft frame (the energy needs no more).
+    pub fn strain_values(&self, y: &YVec) -> (Vector3<f64>, Vector3<f64>) {
+        let (a1, a2) = (v3(y, A1), v3(y, A2));
+        let m = a1.cross(&a2);
+        let n = m / m.norm();
+        let eps = Vector3::new(
+            0.5 * (a1.dot(&a1) - self.metric[0]),
+            0.5 * (a2.dot(&a2) - self.metric[1]),
+            0.5 * (a1.dot(&a2) - self.metric[2]),
+        );
+        let kap = Vector3::new(
+            self.curvature[0] - v3(y, H[0]).dot(&n),
+            self.curvature[1] - v3(y, H[2]).dot(&n),
+            self.curvature[2] - v3(y, H[1]).dot(&n),
+        );
+        (self.to_material * eps, self.to_material * kap)
     }
 }
 
@@ -279,8 +305,28 @@ mod tests {
 
     #[test]
     fn membrane_and_bending_derivatives_match_differences() {
-        check_jet(|y| membrane(y, [1.0, 0.8, 0.1]));
-        check_jet(|y| bending(y, [0.1, -0.2, 0.05]));
+        check_jet(|y| membrane(y, [1.0, 0.8, 0.1], true));
+        check_jet(|y| bending(y, [0.1, -0.2, 0.05], true));
+    }
+
+    #[test]
+    fn strain_values_agree_with_the_jets() {
+        let d = [
+            [0.0; 3],
+            [1.0, 0.1, 0.0],
+            [0.2, 0.9, 0.1],
+            [0.0, 0.1, 0.3],
+            [0.1, 0.0, -0.2],
+            [0.0; 3],
+        ];
+        let rest = RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap();
+        let y = sample_y();
+        let (m, b) = rest.strains(&y, false);
+        let (em, eb) = rest.strain_values(&y);
+        for k in 0..3 {
+            assert!((m.value[k] - em[k]).abs() < 1e-14);
+            assert!((b.value[k] - eb[k]).abs() < 1e-14);
+        }
     }
 
     #[test]
