@@ -8,8 +8,8 @@
 //! Per Gauss point everything is first computed with respect to the 15-vector
 //! y = (a₁, a₂, x,₁₁, x,₁₂, x,₂₂) (see [`crate::shell`]), then expanded to the control points
 //! through the limit stencil: g_i = Σ_k W_ik g_k and H_ij = Σ_kl W_ik H_kl W_jl (3 × 3 blocks).
-//! With n stencil points that expansion costs about 45 n² + 225 n flops; for a regular face
-//! (n = 16) some 15 000 flops per Gauss point.
+//! With n stencil points that expansion costs about 90 n(n+1)/2 + 450 n flops; for a regular
+//! face (n = 16) some 20 000 flops per Gauss point, which is where assembly time goes.
 //!
 //! The Hessian lives in a [`BlockMatrix`]: 3 × 3 blocks on the node pairs (i ≤ j) that share a
 //! Gauss point, a pattern built once per mesh.

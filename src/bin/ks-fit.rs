@@ -374,7 +374,7 @@ fn print_summary(mesh: &PolyMesh, surface: &LimitSurface) {
 }
 
 fn cmd_demo() -> Result<(), String> {
-    println!("kshell demo: the exact Catmull–Clark limit basis on the bundled sample shapes");
+    println!("kshell demo: the exact Catmull–Clark limit basis, then the virtual lab");
     println!(
         "(4 × 4 Gauss points per face; every stencil computed once, as the shell FEM will use it)"
     );
@@ -426,5 +426,48 @@ fn cmd_demo() -> Result<(), String> {
         "the unit cube's limit surface encloses {:.6} of the cube's volume",
         cube.enclosed_volume(&cube.control_points)
     );
+
+    // the virtual lab on the bundled example material
+    let text = include_str!("../../examples/materials/cotton.toml");
+    let mat = kshell::material::parse_material(text, "examples/materials/cotton.toml")
+        .map_err(|e| e.to_string())?;
+    println!();
+    println!(
+        "virtual lab, material '{}' (examples/materials/cotton.toml): 50 x 75 mm strips, 8 x 12 mesh",
+        mat.name
+    );
+    println!(
+        "{:<14} {:>12} {:>12} {:>12}",
+        "strip", "F @ 2.5 %", "F @ 5 %", "F @ 10 %"
+    );
+    for (name, angle) in [
+        ("weft (0°)", 0.0),
+        ("bias (45°)", 45.0),
+        ("warp (90°)", 90.0),
+    ] {
+        let t0 = Instant::now();
+        let curve = TensileStrip::new(0.05, 0.075, angle)
+            .run(&mat, &[0.001875, 0.00375, 0.0075])
+            .map_err(|e| e.to_string())?;
+        println!(
+            "{:<14} {:>10.3} N {:>10.3} N {:>10.3} N   ({:.0} ms)",
+            name,
+            curve[0].force,
+            curve[1].force,
+            curve[2].force,
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+    }
+    for (name, angle) in [("warp", 90.0), ("weft", 0.0)] {
+        let t0 = Instant::now();
+        let r = CantileverBend::new(0.025, 0.06, angle)
+            .run(&mat)
+            .map_err(|e| e.to_string())?;
+        println!(
+            "cantilever, {name}, 25 mm wide, 60 mm overhang: drape angle {:.2}° ({:.0} ms)",
+            r.drape_angle_deg,
+            t0.elapsed().as_secs_f64() * 1e3
+        );
+    }
     Ok(())
 }
