@@ -29,7 +29,7 @@ fn main() {
         name: "bench".into(),
         areal_density: 0.1036,
         thickness: 1.8e-4,
-        law,
+        law: law.into(),
     };
     let mesh = rectangular_grid(0.05, 0.075, 32, 48);
     let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();

@@ -20,7 +20,8 @@ fn main() {
             a22: a11,
             a12: 0.0,
             g12: 1.0e6,
-        },
+        }
+        .into(),
     };
     let c = (a11 * tau.powi(3) / 12.0 / (rho * STANDARD_GRAVITY)).cbrt();
     println!(

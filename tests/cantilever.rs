@@ -22,7 +22,8 @@ fn heavy_case(mesh: (usize, usize), rule: BoundaryRule) -> f64 {
             a22: a11,
             a12: 0.0,
             g12: 1.0e6,
-        },
+        }
+        .into(),
     };
     let d = a11 * tau.powi(3) / 12.0;
     let c = (d / (rho * kshell::assembly::STANDARD_GRAVITY)).cbrt();
@@ -69,7 +70,7 @@ fn tip_force_cantilever_matches_the_exact_elastica() {
         name: "sze".into(),
         areal_density: 1.0,
         thickness: 0.1,
-        law: OrthotropicStvk::isotropic(1.2e6, 0.0),
+        law: OrthotropicStvk::isotropic(1.2e6, 0.0).into(),
     };
     let mut bend = CantileverBend::new(1.0, 10.0, 90.0);
     bend.mesh = (2, 32);

@@ -182,7 +182,7 @@ fn fabric(law: OrthotropicStvk, tau: f64) -> FabricMaterial {
         name: "test".into(),
         areal_density: 0.1,
         thickness: tau,
-        law,
+        law: law.into(),
     }
 }
 

@@ -10,10 +10,28 @@
 //! g12_pa = 1.0e6
 //! ```
 //!
-//! Unknown keys, missing keys and non-positive or non-finite values are errors that name the
-//! file, the line and the key.
+//! Optional tables make the law nonlinear (absent = linear) and add strain cut-offs:
+//!
+//! ```toml
+//! [warp]            # eta1
+//! mu = [0.7, 0.3]
+//! alpha = [1.0, 12.0]
+//! [weft]            # eta3
+//! mu = [1.0]
+//! alpha = [4.0]
+//! [shear]           # eta4
+//! mu = [0.5, 0.5]
+//! alpha = [1.0, 6.0]
+//! [cutoffs]         # Green strain, warp/weft frame; e11_min, e22_min default 0
+//! e11_max = 0.12
+//! e22_max = 0.15
+//! e12_max = 0.20    # e12_min = -e12_max
+//! ```
+//!
+//! Unknown keys, missing keys, non-positive or non-finite values, Σμ ≠ 1 (beyond 1e-12),
+//! arrays of different lengths and α = 0 are errors that name the file, the line and the key.
 
-use super::OrthotropicStvk;
+use super::{Cutoffs, Eta, Orthotropic, OrthotropicStvk};
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -28,6 +46,27 @@ struct RawMaterial {
     a22_pa: f64,
     a12_pa: Option<f64>,
     g12_pa: f64,
+    warp: Option<RawEta>,
+    weft: Option<RawEta>,
+    shear: Option<RawEta>,
+    cutoffs: Option<RawCutoffs>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEta {
+    mu: Vec<f64>,
+    alpha: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCutoffs {
+    e11_min: Option<f64>,
+    e11_max: Option<f64>,
+    e22_min: Option<f64>,
+    e22_max: Option<f64>,
+    e12_max: Option<f64>,
 }
 
 /// A cloth material in SI units.
@@ -38,7 +77,7 @@ pub struct FabricMaterial {
     pub areal_density: f64,
     /// m
     pub thickness: f64,
-    pub law: OrthotropicStvk,
+    pub law: Orthotropic,
 }
 
 /// What is wrong with a material file.
@@ -74,15 +113,27 @@ fn line_of(text: &str, at: usize) -> usize {
     text[..at.min(text.len())].matches('\n').count() + 1
 }
 
-/// Line where `key = …` is written, if it is.
-fn line_of_key(text: &str, key: &str) -> Option<usize> {
-    text.lines()
-        .position(|l| {
-            let l = l.trim_start();
-            l.strip_prefix(key)
+/// Line where `key = …` is written (within `[table]` when given), if it is.
+fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
+    let mut current: Option<String> = None;
+    for (i, l) in text.lines().enumerate() {
+        let l = l.trim_start();
+        if let Some(rest) = l.strip_prefix('[') {
+            current = rest.split(']').next().map(|t| t.trim().to_string());
+            continue;
+        }
+        let here = match table {
+            None => current.is_none(),
+            Some(t) => current.as_deref() == Some(t),
+        };
+        if here
+            && l.strip_prefix(key)
                 .is_some_and(|rest| rest.trim_start().starts_with('='))
-        })
-        .map(|i| i + 1)
+        {
+            return Some(i + 1);
+        }
+    }
+    None
 }
 
 /// Parses and checks material TOML; `path` names it in errors.
@@ -92,6 +143,11 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
         line: e.span().map(|s| line_of(text, s.start)),
         message: e.message().trim().replace('\n', " "),
     })?;
+    let err = |table: Option<&str>, key: &str, message: String| MaterialFileError {
+        path: path.to_string(),
+        line: line_of_key(text, table, key),
+        message,
+    };
     let check = |key: &str, v: f64, allow_zero: bool| -> Result<f64, MaterialFileError> {
         let ok = v.is_finite() && (v > 0.0 || (allow_zero && v == 0.0));
         if ok {
@@ -99,7 +155,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
         } else {
             Err(MaterialFileError {
                 path: path.to_string(),
-                line: line_of_key(text, key),
+                line: line_of_key(text, None, key),
                 message: format!(
                     "{key} must be a finite {} number, got {v}",
                     if allow_zero {
@@ -119,20 +175,117 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
         None => 0.5 * a11.min(a22),
     };
     if a12 * a12 >= a11 * a22 {
-        return Err(MaterialFileError {
-            path: path.to_string(),
-            line: line_of_key(text, "a12_pa"),
-            message: format!(
+        return Err(err(
+            None,
+            "a12_pa",
+            format!(
                 "a12_pa = {a12} makes the membrane law indefinite: need a12² < a11·a22 = {}",
                 a11 * a22
             ),
-        });
+        ));
     }
+    let eta = |table: &str, raw: Option<RawEta>| -> Result<Eta, MaterialFileError> {
+        let Some(r) = raw else {
+            return Ok(Eta::linear());
+        };
+        if r.mu.is_empty() || r.mu.len() != r.alpha.len() {
+            return Err(err(
+                Some(table),
+                "alpha",
+                format!(
+                    "[{table}] needs mu and alpha of the same, non-zero length (got {} and {})",
+                    r.mu.len(),
+                    r.alpha.len()
+                ),
+            ));
+        }
+        for (key, values) in [("mu", &r.mu), ("alpha", &r.alpha)] {
+            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+                return Err(err(
+                    Some(table),
+                    key,
+                    format!("[{table}] {key} holds {v}: every entry must be finite"),
+                ));
+            }
+        }
+        if r.alpha.contains(&0.0) {
+            return Err(err(
+                Some(table),
+                "alpha",
+                format!("[{table}] alpha must not contain 0"),
+            ));
+        }
+        let sum: f64 = r.mu.iter().sum();
+        if (sum - 1.0).abs() > 1e-12 {
+            return Err(err(
+                Some(table),
+                "mu",
+                format!("[{table}] mu must sum to 1 (so that η'(0) = 1), got {sum}"),
+            ));
+        }
+        Ok(Eta {
+            mu: r.mu,
+            alpha: r.alpha,
+        })
+    };
+    let mut cutoffs = Cutoffs::none();
+    if let Some(c) = raw.cutoffs {
+        let pick = |key: &str, v: Option<f64>, default: f64| -> Result<f64, MaterialFileError> {
+            match v {
+                None => Ok(default),
+                Some(x) if x.is_finite() => Ok(x),
+                Some(x) => Err(err(
+                    Some("cutoffs"),
+                    key,
+                    format!("[cutoffs] {key} must be finite, got {x}"),
+                )),
+            }
+        };
+        let (lo, hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        let e11_max = pick("e11_max", c.e11_max, hi)?;
+        let e22_max = pick("e22_max", c.e22_max, hi)?;
+        let e12_max = pick("e12_max", c.e12_max, hi)?;
+        // tensile-only data: compression is extrapolated from zero strain unless told otherwise
+        let e11_min = pick(
+            "e11_min",
+            c.e11_min,
+            if c.e11_max.is_some() { 0.0 } else { lo },
+        )?;
+        let e22_min = pick(
+            "e22_min",
+            c.e22_min,
+            if c.e22_max.is_some() { 0.0 } else { lo },
+        )?;
+        for (key, min, max) in [
+            ("e11_max", e11_min, e11_max),
+            ("e22_max", e22_min, e22_max),
+            ("e12_max", -e12_max, e12_max),
+        ] {
+            if min >= max {
+                return Err(err(
+                    Some("cutoffs"),
+                    key,
+                    format!("[cutoffs] {key} = {max} leaves an empty range (min {min})"),
+                ));
+            }
+        }
+        cutoffs = Cutoffs {
+            e11: (e11_min, e11_max),
+            e22: (e22_min, e22_max),
+            e12: (-e12_max, e12_max),
+        };
+    }
+    let stvk = OrthotropicStvk { a11, a22, a12, g12 };
+    let mut law: Orthotropic = stvk.into();
+    law.warp = eta("warp", raw.warp)?;
+    law.weft = eta("weft", raw.weft)?;
+    law.shear = eta("shear", raw.shear)?;
+    law.cutoffs = cutoffs;
     Ok(FabricMaterial {
         name: raw.name,
         areal_density: check("areal_density_g_m2", raw.areal_density_g_m2, false)? * 1e-3,
         thickness: check("thickness_mm", raw.thickness_mm, false)? * 1e-3,
-        law: OrthotropicStvk { a11, a22, a12, g12 },
+        law,
     })
 }
 
@@ -148,6 +301,22 @@ mod tests {
         assert!((m.areal_density - 0.1036).abs() < 1e-15);
         assert!((m.thickness - 1.8e-4).abs() < 1e-18);
         assert_eq!(m.law.a12, 0.75e7);
+        assert_eq!(m.law.warp, Eta::linear());
+        assert_eq!(m.law.cutoffs, Cutoffs::none());
+    }
+
+    #[test]
+    fn reads_the_nonlinear_tables_and_cutoffs() {
+        let text = format!(
+            "{GOOD}[warp]\nmu = [0.7, 0.3]\nalpha = [1.0, 12.0]\n[shear]\nmu = [1.5, -0.5]\nalpha = [2.0, -3.0]\n[cutoffs]\ne11_max = 0.12\ne12_max = 0.2\n"
+        );
+        let m = parse_material(&text, "m.toml").unwrap();
+        assert_eq!(m.law.warp.alpha, vec![1.0, 12.0]);
+        assert_eq!(m.law.weft, Eta::linear());
+        assert_eq!(m.law.shear.mu, vec![1.5, -0.5]);
+        assert_eq!(m.law.cutoffs.e11, (0.0, 0.12));
+        assert_eq!(m.law.cutoffs.e12, (-0.2, 0.2));
+        assert_eq!(m.law.cutoffs.e22.1, f64::INFINITY);
     }
 
     #[test]
@@ -180,6 +349,30 @@ mod tests {
             (
                 GOOD.replace("a11_pa = 2.0e7", "a11_pa = \"big\""),
                 "m.toml:4: invalid type",
+            ),
+            (
+                format!("{GOOD}[warp]\nmu = [0.7, 0.2]\nalpha = [1.0, 12.0]\n"),
+                "m.toml:8: [warp] mu must sum to 1",
+            ),
+            (
+                format!("{GOOD}[weft]\nmu = [1.0]\nalpha = [4.0, 2.0]\n"),
+                "m.toml:9: [weft] needs mu and alpha of the same",
+            ),
+            (
+                format!("{GOOD}[shear]\nmu = [1.0]\nalpha = [0.0]\n"),
+                "m.toml:9: [shear] alpha must not contain 0",
+            ),
+            (
+                format!("{GOOD}[shear]\nmu = [1.0]\nalpha = [nan]\n"),
+                "m.toml:9: [shear] alpha holds NaN",
+            ),
+            (
+                format!("{GOOD}[cutoffs]\ne11_max = -0.1\n"),
+                "m.toml:8: [cutoffs] e11_max = -0.1 leaves an empty range",
+            ),
+            (
+                format!("{GOOD}[cutoffs]\ne13_max = 0.1\n"),
+                "m.toml:8: unknown field `e13_max`",
             ),
         ];
         for (text, want) in cases {

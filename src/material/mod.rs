@@ -7,8 +7,10 @@
 //! extend [`Law`].
 
 mod file;
+mod orthotropic;
 
 pub use file::{load_material, parse_material, FabricMaterial, MaterialFileError};
+pub use orthotropic::{Cutoffs, Eta, Orthotropic, ParamResponse};
 
 use nalgebra::{Matrix3, Vector3};
 

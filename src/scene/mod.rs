@@ -77,7 +77,7 @@ fn build_model(
     Ok(ShellModel::new(
         basis,
         warp_direction(angle_deg),
-        Arc::new(material.law),
+        Arc::new(material.law.clone()),
         material.thickness,
         material.areal_density,
     )?)

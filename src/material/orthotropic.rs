@@ -1,0 +1,480 @@
+//! The orthotropic hyperelastic law of Clyde, Teran & Tamstorf (2017, Eq. 2):
+//!
+//! ψ = a₁₁/2 η₁(Ẽ₁₁²) + a₁₂ η₂(Ẽ₁₁Ẽ₂₂) + a₂₂/2 η₃(Ẽ₂₂²) + G₁₂ η₄(Ẽ₁₂²),
+//! η_j(x) = Σᵢ μ_ji/α_ji ((x + 1)^α_ji − 1), Σᵢ μ_ji = 1, so η(0) = 0 and η'(0) = 1.
+//!
+//! η₂ is linear (the coupling a₁₂ Ẽ₁₁Ẽ₂₂ is not fitted). Every other term is a function of one
+//! strain component, f(e) = c/2 · η(e²) with c = a₁₁, a₂₂ or 2G₁₂, so the law is a sum of
+//! one-dimensional terms plus a bilinear coupling. That makes the cut-offs simple and exact:
+//! outside the box Ẽ_ij ∈ [min, max] each term is replaced by its second-order Taylor polynomial
+//! about the nearest valid strain, f(e_c) + f'(e_c) δ + ½ f''(e_c) δ², which is the Taylor
+//! expansion of ψ itself about the nearest point of the box (the coupling is already quadratic)
+//! and keeps ψ twice continuously differentiable.
+//!
+//! Parameters, in [`Orthotropic::param_names`] order: a11, a22, a12, g12, then μ and α of warp
+//! (η₁), weft (η₃) and shear (η₄). The μ are reported as independent; a fitter that keeps
+//! Σμ = 1 applies its own chain rule.
+
+use super::{Law, OutOfDomain, Response};
+use nalgebra::{Matrix3, Vector3};
+
+/// η(x) = Σ μᵢ/αᵢ ((x + 1)^αᵢ − 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Eta {
+    pub mu: Vec<f64>,
+    pub alpha: Vec<f64>,
+}
+
+impl Eta {
+    /// η(x) = x.
+    pub fn linear() -> Self {
+        Self {
+            mu: vec![1.0],
+            alpha: vec![1.0],
+        }
+    }
+
+    pub fn degree(&self) -> usize {
+        self.mu.len()
+    }
+
+    /// η, η', η'' at x ≥ 0 (`None` if not finite). (x + 1)^α − 1 is evaluated as
+    /// expm1(α ln1p(x)), without the cancellation that would cost small strains their digits.
+    fn eval(&self, x: f64) -> Option<[f64; 3]> {
+        let b = x + 1.0;
+        let l = x.ln_1p();
+        let mut out = [0.0; 3];
+        for (&m, &a) in self.mu.iter().zip(&self.alpha) {
+            // α = 1 (the linear term) needs no transcendental functions
+            let pm1 = if a == 1.0 { x } else { (a * l).exp_m1() };
+            let p = pm1 + 1.0;
+            out[0] += m / a * pm1;
+            out[1] += m * p / b;
+            out[2] += m * (a - 1.0) * p / (b * b);
+        }
+        out.iter().all(|v| v.is_finite()).then_some(out)
+    }
+
+    /// (∂η, ∂η', ∂η'') with respect to each μᵢ, then each αᵢ.
+    fn param_derivs(&self, x: f64) -> Vec<[f64; 3]> {
+        let b = x + 1.0;
+        let lb = x.ln_1p();
+        let mut dmu = Vec::with_capacity(self.degree());
+        let mut dalpha = Vec::with_capacity(self.degree());
+        for (&m, &a) in self.mu.iter().zip(&self.alpha) {
+            let pm1 = (a * lb).exp_m1();
+            let p = pm1 + 1.0;
+            dmu.push([pm1 / a, p / b, (a - 1.0) * p / (b * b)]);
+            dalpha.push([
+                m * (p * lb / a - pm1 / (a * a)),
+                m * p * lb / b,
+                m * p / (b * b) * (1.0 + (a - 1.0) * lb),
+            ]);
+        }
+        dmu.extend(dalpha);
+        dmu
+    }
+}
+
+/// Strain cut-offs (Green strain, warp/weft frame): each component is valid in [min, max];
+/// ±∞ where there is none.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cutoffs {
+    pub e11: (f64, f64),
+    pub e22: (f64, f64),
+    pub e12: (f64, f64),
+}
+
+impl Cutoffs {
+    pub fn none() -> Self {
+        let all = (f64::NEG_INFINITY, f64::INFINITY);
+        Self {
+            e11: all,
+            e22: all,
+            e12: all,
+        }
+    }
+}
+
+/// The Clyde et al. law with its cut-offs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Orthotropic {
+    pub a11: f64,
+    pub a22: f64,
+    pub a12: f64,
+    pub g12: f64,
+    pub warp: Eta,
+    pub weft: Eta,
+    pub shear: Eta,
+    pub cutoffs: Cutoffs,
+}
+
+/// One one-dimensional term f(e) = c/2 η(e²) with its derivatives in e (and in parameters).
+struct Term<'a> {
+    c: f64,
+    eta: &'a Eta,
+    range: (f64, f64),
+}
+
+impl Term<'_> {
+    /// f, f', f'' at e (with the Taylor extension outside `range`).
+    fn eval(&self, e: f64) -> Option<[f64; 3]> {
+        let ec = e.clamp(self.range.0, self.range.1);
+        let d = e - ec;
+        let x = ec * ec;
+        let [h, h1, h2] = self.eta.eval(x)?;
+        let f = 0.5 * self.c * h;
+        let f1 = self.c * ec * h1;
+        let f2 = self.c * (h1 + 2.0 * x * h2);
+        Some([f + f1 * d + 0.5 * f2 * d * d, f1 + f2 * d, f2])
+    }
+
+    /// (∂f/∂k, ∂f'/∂k) for k = c, then each μ, then each α.
+    fn param_eval(&self, e: f64) -> Option<Vec<[f64; 2]>> {
+        let ec = e.clamp(self.range.0, self.range.1);
+        let d = e - ec;
+        let x = ec * ec;
+        let [h, h1, h2] = self.eta.eval(x)?;
+        // (∂f, ∂f', ∂f'') at e_c for each parameter, then the Taylor extension
+        let mut rows = vec![[0.5 * h, ec * h1, h1 + 2.0 * x * h2]];
+        for [g, g1, g2] in self.eta.param_derivs(x) {
+            rows.push([
+                0.5 * self.c * g,
+                self.c * ec * g1,
+                self.c * (g1 + 2.0 * x * g2),
+            ]);
+        }
+        let out: Vec<[f64; 2]> = rows
+            .iter()
+            .map(|[a, b, c]| [a + b * d + 0.5 * c * d * d, b + c * d])
+            .collect();
+        out.iter().flatten().all(|v| v.is_finite()).then_some(out)
+    }
+}
+
+/// Parameter sensitivities of the law at one strain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamResponse {
+    /// ∂ψ/∂k
+    pub dpsi: Vec<f64>,
+    /// ∂²ψ/∂Ẽ∂k
+    pub dstress: Vec<Vector3<f64>>,
+}
+
+impl Orthotropic {
+    fn terms(&self) -> [Term<'_>; 3] {
+        [
+            Term {
+                c: self.a11,
+                eta: &self.warp,
+                range: self.cutoffs.e11,
+            },
+            Term {
+                c: self.a22,
+                eta: &self.weft,
+                range: self.cutoffs.e22,
+            },
+            Term {
+                c: 2.0 * self.g12,
+                eta: &self.shear,
+                range: self.cutoffs.e12,
+            },
+        ]
+    }
+
+    /// Names of the parameters, in the order of [`ParamResponse`].
+    pub fn param_names(&self) -> Vec<String> {
+        let mut n: Vec<String> = ["a11", "a22", "a12", "g12"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        for (name, eta) in [
+            ("warp", &self.warp),
+            ("weft", &self.weft),
+            ("shear", &self.shear),
+        ] {
+            for i in 0..eta.degree() {
+                n.push(format!("{name}.mu[{i}]"));
+            }
+            for i in 0..eta.degree() {
+                n.push(format!("{name}.alpha[{i}]"));
+            }
+        }
+        n
+    }
+
+    /// Current parameter values, in [`Orthotropic::param_names`] order.
+    pub fn params(&self) -> Vec<f64> {
+        let mut k = vec![self.a11, self.a22, self.a12, self.g12];
+        for eta in [&self.warp, &self.weft, &self.shear] {
+            k.extend(&eta.mu);
+            k.extend(&eta.alpha);
+        }
+        k
+    }
+
+    /// Sets the parameters from a vector in [`Orthotropic::param_names`] order.
+    pub fn set_params(&mut self, k: &[f64]) {
+        self.a11 = k[0];
+        self.a22 = k[1];
+        self.a12 = k[2];
+        self.g12 = k[3];
+        let mut at = 4;
+        for eta in [&mut self.warp, &mut self.weft, &mut self.shear] {
+            let d = eta.degree();
+            eta.mu.copy_from_slice(&k[at..at + d]);
+            eta.alpha.copy_from_slice(&k[at + d..at + 2 * d]);
+            at += 2 * d;
+        }
+    }
+
+    /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
+    pub fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
+        let bad = || OutOfDomain {
+            strain: [e[0], e[1], e[2]],
+        };
+        let n = self.params().len();
+        let mut dpsi = vec![0.0; n];
+        let mut dstress = vec![Vector3::zeros(); n];
+        // a12: ψ₂ = a12 e11 e22
+        dpsi[2] = e[0] * e[1];
+        dstress[2] = Vector3::new(e[1], e[0], 0.0);
+        let terms = self.terms();
+        // the stiffness of each term: a11, a22, then G12 (c = 2 G12, so ∂/∂G12 = 2 ∂/∂c)
+        let stiff_index = [0usize, 1, 3];
+        let stiff_factor = [1.0, 1.0, 2.0];
+        let mut at = 4;
+        // parameter blocks are ordered warp, weft, shear = components 0, 1, 2
+        for (comp, term) in terms.iter().enumerate() {
+            let rows = term.param_eval(e[comp]).ok_or_else(bad)?;
+            let s = stiff_index[comp];
+            dpsi[s] += stiff_factor[comp] * rows[0][0];
+            dstress[s][comp] += stiff_factor[comp] * rows[0][1];
+            for (j, r) in rows[1..].iter().enumerate() {
+                dpsi[at + j] = r[0];
+                dstress[at + j][comp] = r[1];
+            }
+            at += rows.len() - 1;
+        }
+        Ok(ParamResponse { dpsi, dstress })
+    }
+}
+
+impl From<super::OrthotropicStvk> for Orthotropic {
+    fn from(s: super::OrthotropicStvk) -> Self {
+        Self {
+            a11: s.a11,
+            a22: s.a22,
+            a12: s.a12,
+            g12: s.g12,
+            warp: Eta::linear(),
+            weft: Eta::linear(),
+            shear: Eta::linear(),
+            cutoffs: Cutoffs::none(),
+        }
+    }
+}
+
+impl Law for Orthotropic {
+    fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
+        let bad = || OutOfDomain {
+            strain: [e[0], e[1], e[2]],
+        };
+        let mut psi = self.a12 * e[0] * e[1];
+        let mut stress = Vector3::new(self.a12 * e[1], self.a12 * e[0], 0.0);
+        let mut tangent = Matrix3::zeros();
+        tangent[(0, 1)] = self.a12;
+        tangent[(1, 0)] = self.a12;
+        for (k, term) in self.terms().iter().enumerate() {
+            let [f, f1, f2] = term.eval(e[k]).ok_or_else(bad)?;
+            psi += f;
+            stress[k] += f1;
+            tangent[(k, k)] += f2;
+        }
+        Ok(Response {
+            psi,
+            stress,
+            tangent,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::OrthotropicStvk;
+
+    fn sample() -> Orthotropic {
+        Orthotropic {
+            a11: 3.0e7,
+            a22: 1.5e7,
+            a12: 4.0e6,
+            g12: 1.0e6,
+            warp: Eta {
+                mu: vec![0.7, 0.3],
+                alpha: vec![1.0, 12.0],
+            },
+            weft: Eta {
+                mu: vec![1.0],
+                alpha: vec![4.0],
+            },
+            shear: Eta {
+                mu: vec![1.4, -0.4],
+                alpha: vec![2.0, -3.0],
+            },
+            cutoffs: Cutoffs {
+                e11: (0.0, 0.12),
+                e22: (0.0, 0.15),
+                e12: (-0.2, 0.2),
+            },
+        }
+    }
+
+    /// Strains inside the box, outside it on either side, and on each face.
+    fn strains() -> Vec<Vector3<f64>> {
+        vec![
+            Vector3::new(0.05, 0.08, 0.1),
+            Vector3::new(0.2, 0.1, -0.05),
+            Vector3::new(-0.03, 0.3, 0.35),
+            Vector3::new(0.11, -0.02, -0.3),
+            Vector3::new(0.07, 0.04, 0.0),
+        ]
+    }
+
+    #[test]
+    fn linear_eta_is_stvk_exactly() {
+        let s = OrthotropicStvk {
+            a11: 3.0e7,
+            a22: 1.2e7,
+            a12: 4.0e6,
+            g12: 9.0e5,
+        };
+        let o: Orthotropic = s.into();
+        for e in strains() {
+            let (a, b) = (s.response(&e).unwrap(), o.response(&e).unwrap());
+            assert!(
+                (a.psi - b.psi).abs() <= 4e-16 * a.psi.abs().max(1.0),
+                "{} vs {}",
+                a.psi,
+                b.psi
+            );
+            assert!((a.stress - b.stress).norm() <= 4e-16 * a.stress.norm().max(1.0));
+            assert!((a.tangent - b.tangent).norm() <= 1e-9);
+        }
+    }
+
+    #[test]
+    fn strain_derivatives_match_differences_inside_and_outside_the_box() {
+        let law = sample();
+        let h = 1e-7;
+        for e in strains() {
+            let r = law.response(&e).unwrap();
+            for i in 0..3 {
+                let (mut ep, mut em) = (e, e);
+                ep[i] += h;
+                em[i] -= h;
+                let (p, m) = (law.response(&ep).unwrap(), law.response(&em).unwrap());
+                let fd = (p.psi - m.psi) / (2.0 * h);
+                assert!(
+                    (fd - r.stress[i]).abs() <= 1e-6 * r.stress.norm(),
+                    "stress {i} at {e:?}"
+                );
+                for j in 0..3 {
+                    let fd = (p.stress[j] - m.stress[j]) / (2.0 * h);
+                    let scale = r.tangent.norm();
+                    assert!(
+                        (fd - r.tangent[(j, i)]).abs() <= 1e-6 * scale,
+                        "tangent ({j},{i}) at {e:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn parameter_derivatives_match_differences() {
+        let law = sample();
+        let k0 = law.params();
+        let names = law.param_names();
+        assert_eq!(names.len(), k0.len());
+        for e in strains() {
+            let pr = law.param_response(&e).unwrap();
+            for (j, name) in names.iter().enumerate() {
+                // fourth-order differences with a step large enough to keep ψ's round-off out
+                let h = 1e-4 * k0[j].abs().max(1e-3);
+                let at = |t: f64| {
+                    let mut k = k0.clone();
+                    k[j] += t;
+                    let mut l = law.clone();
+                    l.set_params(&k);
+                    l.response(&e).unwrap()
+                };
+                let (p2, p, m, m2) = (at(2.0 * h), at(h), at(-h), at(-2.0 * h));
+                let d4 = |f: &dyn Fn(&Response) -> f64| {
+                    (-f(&p2) + 8.0 * f(&p) - 8.0 * f(&m) + f(&m2)) / (12.0 * h)
+                };
+                // differences carry ~ε ψ / h ≈ 1e-12 ψ/|k| of noise: derivatives below 1e-5 ψ/|k| are
+                // checked to that absolute level, all others to 1e-6 relative
+                let r0 = law.response(&e).unwrap();
+                let kscale = k0[j].abs().max(1e-3);
+                let fd = d4(&|r| r.psi);
+                let scale = pr.dpsi[j].abs().max(1e-5 * r0.psi.abs() / kscale);
+                assert!(
+                    (fd - pr.dpsi[j]).abs() <= 1e-6 * scale,
+                    "∂ψ/∂{name} at {e:?}: {fd} vs {}",
+                    pr.dpsi[j]
+                );
+                let fds = Vector3::from_fn(|i, _| d4(&|r| r.stress[i]));
+                let sscale = pr.dstress[j].norm().max(1e-5 * r0.stress.norm() / kscale);
+                assert!(
+                    (fds - pr.dstress[j]).norm() <= 1e-6 * sscale,
+                    "∂S/∂{name} at {e:?}: {fds:?} vs {:?}",
+                    pr.dstress[j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn value_gradient_and_hessian_are_continuous_across_each_cutoff() {
+        let law = sample();
+        let faces = [
+            (0, 0.12),
+            (0, 0.0),
+            (1, 0.15),
+            (1, 0.0),
+            (2, 0.2),
+            (2, -0.2),
+        ];
+        for (k, at) in faces {
+            let mut e = Vector3::new(0.05, 0.07, 0.03);
+            let eps = 1e-9;
+            e[k] = at - eps;
+            let a = law.response(&e).unwrap();
+            e[k] = at + eps;
+            let b = law.response(&e).unwrap();
+            assert!(
+                (a.psi - b.psi).abs() <= 1e-6 * a.psi.abs(),
+                "ψ at component {k} = {at}"
+            );
+            assert!(
+                (a.stress - b.stress).norm() <= 1e-6 * a.stress.norm(),
+                "S at {k} = {at}"
+            );
+            assert!(
+                (a.tangent - b.tangent).norm() <= 1e-6 * a.tangent.norm(),
+                "C at {k} = {at}"
+            );
+        }
+    }
+
+    #[test]
+    fn shear_sign_does_not_matter() {
+        let law = sample();
+        for e in strains() {
+            let f = Vector3::new(e[0], e[1], -e[2]);
+            let (a, b) = (law.response(&e).unwrap(), law.response(&f).unwrap());
+            assert!((a.psi - b.psi).abs() <= 1e-14 * a.psi.abs());
+        }
+    }
+}
