@@ -256,3 +256,96 @@ fn isotropic_material_gives_the_same_curve_at_every_angle() {
         }
     }
 }
+
+#[test]
+fn parameter_and_thickness_sensitivities_match_differences() {
+    use kshell::material::{Cutoffs, Eta, Orthotropic};
+    let law = Orthotropic {
+        a11: 2.0e7,
+        a22: 1.2e7,
+        a12: 3.0e6,
+        g12: 1.5e6,
+        warp: Eta {
+            mu: vec![0.6, 0.4],
+            alpha: vec![1.0, 8.0],
+        },
+        weft: Eta {
+            mu: vec![1.0],
+            alpha: vec![3.0],
+        },
+        shear: Eta {
+            mu: vec![1.5, -0.5],
+            alpha: vec![2.0, -2.0],
+        },
+        // tight enough that some Gauss points lie outside the box
+        cutoffs: Cutoffs {
+            e11: (0.0, 0.02),
+            e22: (0.0, 0.03),
+            e12: (-0.02, 0.02),
+        },
+    };
+    let mut mesh = rectangular_grid(0.04, 0.06, 3, 4);
+    for p in &mut mesh.positions {
+        p[2] = 4.0 * p[0] * p[0] - 3.0 * p[0] * p[1];
+    }
+    let basis = LimitBasis::new(
+        &mesh,
+        BasisOptions {
+            boundary: BoundaryRule::Phantom,
+            gauss_points: 3,
+        },
+    )
+    .unwrap();
+    let tau = 4e-4;
+    let mut model =
+        ShellModel::new(basis, [0.8, 0.6, 0.1], Arc::new(law.clone()), tau, 0.2).unwrap();
+    let mut rng = Rng(17);
+    let x = perturbed(&model.basis.control_points, &mut rng, 3e-3);
+    let sens = model.sensitivities(&x).unwrap();
+    let k0 = law.params();
+    let n = x.len();
+    let mut gp = vec![[0.0; 3]; n];
+    let mut gm = vec![[0.0; 3]; n];
+    for (j, name) in sens.names.iter().enumerate() {
+        let is_tau = j == k0.len();
+        let base = if is_tau { tau } else { k0[j] };
+        let h = 1e-5 * base.abs().max(1e-2);
+        let mut eval = |t: f64, g: &mut Vec<[f64; 3]>| -> f64 {
+            if is_tau {
+                model.set_thickness(tau + t).unwrap();
+                model.law = Arc::new(law.clone());
+            } else {
+                let mut k = k0.clone();
+                k[j] += t;
+                let mut l = law.clone();
+                l.set_params(&k);
+                model.law = Arc::new(l);
+                model.set_thickness(tau).unwrap();
+            }
+            model.assemble(&x, Want::Gradient, Some(g), None).unwrap()
+        };
+        let ep = eval(h, &mut gp);
+        let em = eval(-h, &mut gm);
+        let fd = (ep - em) / (2.0 * h);
+        assert!(
+            (fd - sens.energy[j]).abs() <= 1e-6 * sens.energy[j].abs().max(1e-12),
+            "∂E/∂{name}: {fd} vs {}",
+            sens.energy[j]
+        );
+        let scale = sens.gradient[j]
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            for c in 0..3 {
+                let fd = (gp[i][c] - gm[i][c]) / (2.0 * h);
+                assert!(
+                    (fd - sens.gradient[j][i][c]).abs() <= 1e-6 * scale,
+                    "∂g/∂{name} node {i} comp {c}: {fd} vs {}",
+                    sens.gradient[j][i][c]
+                );
+            }
+        }
+    }
+    model.set_thickness(tau).unwrap();
+}

@@ -155,6 +155,17 @@ pub struct ShellModel {
     local_index: Vec<u16>,
 }
 
+/// Parameter sensitivities of the energy and of its gradient.
+#[derive(Clone, Debug)]
+pub struct Sensitivities {
+    /// The law's parameter names, then "thickness".
+    pub names: Vec<String>,
+    /// ∂E/∂k
+    pub energy: Vec<f64>,
+    /// ∂(∂E/∂x)/∂k, one array over the control points per parameter
+    pub gradient: Vec<Vec<Vec3>>,
+}
+
 /// Number of fixed face groups assembled in parallel (fixed so that sums are reproducible).
 pub const CHUNKS: usize = 8;
 
@@ -562,6 +573,92 @@ impl ShellModel {
             }
         }
         Ok(())
+    }
+
+    /// Changes the thickness (m), keeping everything else.
+    pub fn set_thickness(&mut self, thickness: f64) -> Result<(), ModelError> {
+        if !(thickness > 0.0 && thickness.is_finite()) {
+            return Err(ModelError::Thickness(thickness));
+        }
+        self.thickness = thickness;
+        self.thickness_rule = GaussLegendre::new(3)
+            .expect("3 is a valid rule")
+            .through_thickness(thickness);
+        Ok(())
+    }
+
+    /// ∂E/∂k and ∂(∂E/∂x)/∂k at `x` for every parameter k of the law and, last, the thickness
+    /// τ (the fitter's right-hand sides, paper Eq. 6). With the thickness rule ξ_q = τ t_q / 2,
+    /// w̃_q = τ w_q / 2, the τ-derivative is that of the quadrature actually used:
+    /// ∂/∂τ Σ w̃ ψ(Ẽ_m + ξ Ẽ_b) = Σ (w̃/τ) ψ + Σ w̃ (ξ/τ) S·Ẽ_b.
+    pub fn sensitivities(&self, x: &[Vec3]) -> Result<Sensitivities, OutOfDomain> {
+        let mut names = self.law.param_names();
+        names.push("thickness".into());
+        let np = names.len();
+        let nn = self.num_nodes();
+        let tau = self.thickness;
+        let mut energy = vec![0.0; np];
+        let mut gradient = vec![vec![[0.0; 3]; nn]; np];
+        for q in 0..self.basis.num_points() {
+            let (idx, w) = self.basis.stencil(q);
+            let mut d = [[0.0; 3]; 6];
+            for (&i, wi) in idx.iter().zip(w) {
+                for k in 1..6 {
+                    for c in 0..3 {
+                        d[k][c] += wi[k] * x[i as usize][c];
+                    }
+                }
+            }
+            let y = kinematic_vector(&d);
+            let rest = &self.rest[q];
+            let (m, b) = rest.strains(&y, false);
+            let em = Vector3::from(m.value);
+            let eb = Vector3::from(b.value);
+            let da = rest.d_area;
+            let mut dey = vec![0.0; np];
+            let mut dgy = vec![YVec::zeros(); np];
+            for &(xi, wt) in &self.thickness_rule {
+                let e = em + xi * eb;
+                let r = self.law.response(&e)?;
+                let pr = self.law.param_response(&e)?;
+                // G(ξ)ᵀ v = Σ_k v_k (∇Ẽm_k + ξ ∇Ẽb_k)
+                let gt = |v: &Vector3<f64>| -> YVec {
+                    let mut out = YVec::zeros();
+                    for k in 0..3 {
+                        out += v[k] * (m.grad[k] + xi * b.grad[k]);
+                    }
+                    out
+                };
+                for j in 0..np - 1 {
+                    dey[j] += wt * pr.dpsi[j];
+                    dgy[j] += wt * gt(&pr.dstress[j]);
+                }
+                let jt = np - 1;
+                dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
+                let mut gb = YVec::zeros();
+                for k in 0..3 {
+                    gb += r.stress[k] * b.grad[k];
+                }
+                dgy[jt] += (wt / tau) * gt(&r.stress)
+                    + (wt * xi / tau) * gb
+                    + (wt * xi / tau) * gt(&(r.tangent * eb));
+            }
+            for j in 0..np {
+                energy[j] += da * dey[j];
+                for (&i, wi) in idx.iter().zip(w) {
+                    for k in 0..5 {
+                        for c in 0..3 {
+                            gradient[j][i as usize][c] += da * wi[k + 1] * dgy[j][3 * k + c];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(Sensitivities {
+            names,
+            energy,
+            gradient,
+        })
     }
 
     /// Total energy.

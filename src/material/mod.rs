@@ -32,6 +32,12 @@ pub struct OutOfDomain {
 /// A hyperelastic law of the in-plane Green strain.
 pub trait Law: Send + Sync {
     fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain>;
+
+    /// Names of the law's parameters k, in the order of [`Law::param_response`].
+    fn param_names(&self) -> Vec<String>;
+
+    /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
+    fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain>;
 }
 
 /// ψ = a₁₁/2 Ẽ₁₁² + a₁₂ Ẽ₁₁Ẽ₂₂ + a₂₂/2 Ẽ₂₂² + G₁₂ Ẽ₁₂² (Pa). Isotropic when a₁₁ = a₂₂ and
@@ -74,6 +80,30 @@ impl OrthotropicStvk {
 }
 
 impl Law for OrthotropicStvk {
+    fn param_names(&self) -> Vec<String> {
+        ["a11", "a22", "a12", "g12"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect()
+    }
+
+    fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
+        Ok(ParamResponse {
+            dpsi: vec![
+                0.5 * e[0] * e[0],
+                0.5 * e[1] * e[1],
+                e[0] * e[1],
+                e[2] * e[2],
+            ],
+            dstress: vec![
+                Vector3::new(e[0], 0.0, 0.0),
+                Vector3::new(0.0, e[1], 0.0),
+                Vector3::new(e[1], e[0], 0.0),
+                Vector3::new(0.0, 0.0, 2.0 * e[2]),
+            ],
+        })
+    }
+
     fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
         let c = self.tangent();
         let stress = c * e;

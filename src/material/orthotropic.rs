@@ -11,7 +11,7 @@
 //! expansion of ψ itself about the nearest point of the box (the coupling is already quadratic)
 //! and keeps ψ twice continuously differentiable.
 //!
-//! Parameters, in [`Orthotropic::param_names`] order: a11, a22, a12, g12, then μ and α of warp
+//! Parameters, in [`Orthotropic::names`] order: a11, a22, a12, g12, then μ and α of warp
 //! (η₁), weft (η₃) and shear (η₄). The μ are reported as independent; a fitter that keeps
 //! Σμ = 1 applies its own chain rule.
 
@@ -183,7 +183,7 @@ impl Orthotropic {
     }
 
     /// Names of the parameters, in the order of [`ParamResponse`].
-    pub fn param_names(&self) -> Vec<String> {
+    pub fn names(&self) -> Vec<String> {
         let mut n: Vec<String> = ["a11", "a22", "a12", "g12"]
             .iter()
             .map(|s| s.to_string())
@@ -203,7 +203,7 @@ impl Orthotropic {
         n
     }
 
-    /// Current parameter values, in [`Orthotropic::param_names`] order.
+    /// Current parameter values, in [`Orthotropic::names`] order.
     pub fn params(&self) -> Vec<f64> {
         let mut k = vec![self.a11, self.a22, self.a12, self.g12];
         for eta in [&self.warp, &self.weft, &self.shear] {
@@ -213,7 +213,7 @@ impl Orthotropic {
         k
     }
 
-    /// Sets the parameters from a vector in [`Orthotropic::param_names`] order.
+    /// Sets the parameters from a vector in [`Orthotropic::names`] order.
     pub fn set_params(&mut self, k: &[f64]) {
         self.a11 = k[0];
         self.a22 = k[1];
@@ -229,7 +229,7 @@ impl Orthotropic {
     }
 
     /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
-    pub fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
+    fn sensitivities(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
         let bad = || OutOfDomain {
             strain: [e[0], e[1], e[2]],
         };
@@ -276,6 +276,14 @@ impl From<super::OrthotropicStvk> for Orthotropic {
 }
 
 impl Law for Orthotropic {
+    fn param_names(&self) -> Vec<String> {
+        self.names()
+    }
+
+    fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
+        self.sensitivities(e)
+    }
+
     fn response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
         let bad = || OutOfDomain {
             strain: [e[0], e[1], e[2]],
@@ -395,10 +403,10 @@ mod tests {
     fn parameter_derivatives_match_differences() {
         let law = sample();
         let k0 = law.params();
-        let names = law.param_names();
+        let names = law.names();
         assert_eq!(names.len(), k0.len());
         for e in strains() {
-            let pr = law.param_response(&e).unwrap();
+            let pr = law.sensitivities(&e).unwrap();
             for (j, name) in names.iter().enumerate() {
                 // fourth-order differences with a step large enough to keep ψ's round-off out
                 let h = 1e-4 * k0[j].abs().max(1e-3);
