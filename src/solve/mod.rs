@@ -21,6 +21,8 @@ use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
+pub mod refine;
+
 use std::time::Instant;
 
 const NOT_FREE: u32 = u32::MAX;
