@@ -152,7 +152,7 @@ pub fn refine(
         let mut corr = r.clone();
         solve(&mut corr);
         let size = norm(&corr) / norm(x).max(f64::MIN_POSITIVE);
-        if !(size < 0.5 * last) {
+        if size.is_nan() || size >= 0.5 * last {
             // the corrections stopped converging: this one is noise, keep x as it is
             break;
         }
