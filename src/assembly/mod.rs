@@ -575,6 +575,24 @@ impl ShellModel {
         Ok(())
     }
 
+    /// Lumped (row-sum) mass of each control point, kg: ρ Σ_q dA_q |W_q,i|. With a zero areal
+    /// density the same distribution at 1 kg/m² (it then only serves as a metric).
+    pub fn lumped_mass(&self) -> Vec<f64> {
+        let rho = if self.areal_density > 0.0 {
+            self.areal_density
+        } else {
+            1.0
+        };
+        let mut m = vec![0.0; self.num_nodes()];
+        for (q, rest) in self.rest.iter().enumerate() {
+            let (idx, w) = self.basis.stencil(q);
+            for (&i, wi) in idx.iter().zip(w) {
+                m[i as usize] += rho * rest.d_area * wi[0].abs();
+            }
+        }
+        m
+    }
+
     /// Changes the thickness (m), keeping everything else.
     pub fn set_thickness(&mut self, thickness: f64) -> Result<(), ModelError> {
         if !(thickness > 0.0 && thickness.is_finite()) {

@@ -23,6 +23,8 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{MatMut, Side};
 pub mod refine;
 
+pub use refine::Precision;
+
 use std::time::Instant;
 
 const NOT_FREE: u32 = u32::MAX;
@@ -70,6 +72,8 @@ pub enum SolveError {
     Stalled { residual: f64 },
     #[error("linear solve failed: {0}")]
     Linear(String),
+    #[error("the Hessian is not positive definite (plain Newton has no fallback; relative residual {residual:.3e})")]
+    Indefinite { residual: f64 },
 }
 
 impl FreeSystem {
@@ -251,9 +255,8 @@ impl FreeSystem {
         }
     }
 
-    /// Factorises the free Hessian, shifting its diagonal until it is positive definite.
-    /// Returns the factor and the shift used.
-    fn factor(&self, values: &mut [f64]) -> Result<(Llt<usize, f64>, f64), SolveError> {
+    /// Cholesky of the free matrix with `values`; `None` when a pivot is not positive.
+    fn try_factor(&self, values: &[f64]) -> Result<Option<Llt<usize, f64>>, SolveError> {
         let sym = SymbolicSparseColMatRef::new_checked(
             self.num_free,
             self.num_free,
@@ -261,48 +264,35 @@ impl FreeSystem {
             None,
             &self.row_idx,
         );
-        let mean_diag =
-            self.diag.iter().map(|&k| values[k].abs()).sum::<f64>() / self.diag.len().max(1) as f64;
-        let mut shift = 0.0;
-        for attempt in 0..40 {
-            if attempt > 0 {
-                let next = if shift == 0.0 {
-                    1e-8 * mean_diag
-                } else {
-                    10.0 * shift
-                };
-                for &k in &self.diag {
-                    values[k] += next - shift;
-                }
-                shift = next;
-            }
-            match Llt::try_new_with_symbolic(
-                self.symbolic.clone(),
-                SparseColMatRef::new(sym, values),
-                Side::Lower,
-            ) {
-                Ok(llt) => return Ok((llt, shift)),
-                Err(faer::sparse::linalg::LltError::Numeric(_)) => continue,
-                Err(e) => return Err(SolveError::Linear(format!("{e:?}"))),
-            }
+        match Llt::try_new_with_symbolic(
+            self.symbolic.clone(),
+            SparseColMatRef::new(sym, values),
+            Side::Lower,
+        ) {
+            Ok(llt) => Ok(Some(llt)),
+            Err(faer::sparse::linalg::LltError::Numeric(_)) => Ok(None),
+            Err(e) => Err(SolveError::Linear(format!("{e:?}"))),
         }
-        Err(SolveError::Linear(
-            "the Hessian stayed indefinite under every diagonal shift".into(),
-        ))
     }
 
-    /// y = A x with the stored lower triangle (symmetric product).
-    fn sym_mul(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
-        y.iter_mut().for_each(|v| *v = 0.0);
-        for c in 0..self.num_free {
-            for k in self.col_ptr[c]..self.col_ptr[c + 1] {
-                let r = self.row_idx[k];
-                y[r] += values[k] * x[c];
-                if r != c {
-                    y[c] += values[k] * x[r];
-                }
+    /// The matrix in the form the refinement kernels read.
+    fn sym_lower<'a>(&'a self, values: &'a [f64]) -> refine::SymLower<'a> {
+        refine::SymLower {
+            col_ptr: &self.col_ptr,
+            row_idx: &self.row_idx,
+            values,
+        }
+    }
+
+    /// Lumped mass of each free DOF (for the backward-Euler metric).
+    fn free_mass(&self, node_mass: &[f64]) -> Vec<f64> {
+        let mut m = vec![0.0; self.num_free];
+        for (dof, maps) in self.map.iter().enumerate() {
+            for &(f, c) in maps {
+                m[f as usize] += c.abs() * node_mass[dof / 3];
             }
         }
+        m
     }
 }
 
@@ -312,6 +302,13 @@ pub struct NewtonOptions {
     pub max_iterations: usize,
     /// Relative residual target (see the module docs).
     pub rtol: f64,
+    /// Take backward-Euler steps when Newton cannot (indefinite Hessian, ascent direction,
+    /// stagnation). Without it those cases are failures: that is plain Newton.
+    pub fallback: bool,
+    /// Arithmetic of the iterative-refinement residual.
+    pub precision: Precision,
+    /// Most refinement corrections per linear solve (0: none).
+    pub refine_steps: usize,
 }
 
 impl Default for NewtonOptions {
@@ -319,20 +316,51 @@ impl Default for NewtonOptions {
         Self {
             max_iterations: 60,
             rtol: 1e-10,
+            fallback: true,
+            precision: Precision::DoubleDouble,
+            refine_steps: 4,
         }
     }
+}
+
+impl NewtonOptions {
+    /// Newton with a line search and nothing else.
+    pub fn plain() -> Self {
+        Self {
+            fallback: false,
+            refine_steps: 0,
+            ..Self::default()
+        }
+    }
+}
+
+/// Why backward Euler was used.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FallbackCounts {
+    /// The Cholesky factorisation met a non-positive pivot (the Hessian is not positive definite).
+    pub indefinite: usize,
+    /// The Newton step was not a descent direction, or the line search found no decrease.
+    pub ascent: usize,
+    /// Three consecutive Newton steps lowered the energy by ≤ 0.1 % in all without the residual
+    /// falling tenfold.
+    pub stagnation: usize,
 }
 
 /// What a solve did.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SolveReport {
+    /// Newton and backward-Euler iterations.
     pub iterations: usize,
     pub energy: f64,
     /// ‖g_free‖ / force scale at the end.
     pub residual: f64,
     pub factorizations: usize,
-    /// Newton steps whose Hessian needed a diagonal shift.
-    pub shifted_steps: usize,
+    /// Backward-Euler steps taken, and why the solver turned to them.
+    pub backward_euler_steps: usize,
+    pub fallbacks: FallbackCounts,
+    /// Refinement corrections applied over all linear solves, and the precision used.
+    pub refinement_steps: usize,
+    pub precision: Precision,
     /// Line-search step halvings in total.
     pub backtracks: usize,
     pub assembly_seconds: f64,
@@ -346,7 +374,20 @@ fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
-/// Solves for equilibrium from `x` (fixed DOFs keep their values), in place.
+/// Why the next step is a backward-Euler step.
+enum Mode {
+    Newton,
+    BackwardEuler,
+}
+
+/// Solves for equilibrium from `x` (fixed DOFs keep their values, slaved ones follow), in place.
+///
+/// Each iteration assembles energy, gradient and Hessian and tests convergence. A Newton step
+/// solves H d = −g (Cholesky, refined); a backward-Euler step solves (H + μM) d = −g, the
+/// linearised minimiser of E(x) + μ/2 ‖x − x̂‖²_M (μ = 1/h², M the lumped mass), with μ raised
+/// tenfold until the factorisation succeeds and lowered fourfold after each use. Both are
+/// followed by a backtracking line search on the energy. After a backward-Euler step the solver
+/// tries Newton again.
 pub fn newton(
     model: &ShellModel,
     system: &FreeSystem,
@@ -359,13 +400,20 @@ pub fn newton(
     let mut grad = vec![[0.0; 3]; nn];
     let mut hess = BlockMatrix::zeros(model.pattern.clone());
     let mut values = Vec::new();
-    let mut report = SolveReport::default();
+    let mut report = SolveReport {
+        precision: opts.precision,
+        ..SolveReport::default()
+    };
     let external = model.external_load();
     let external_scale = norm(&external.concat());
+    let mass = system.free_mass(&model.lumped_mass());
     let mut trial = x.to_vec();
     let mut gf = vec![0.0; nf];
     let mut d = vec![0.0; nf];
-    let mut check = vec![0.0; nf];
+    let mut mode = Mode::Newton;
+    let mut mu = 0.0f64;
+    // (energy, residual) after recent Newton steps, for the stagnation rule
+    let mut history: Vec<(f64, f64)> = Vec::new();
     system.apply_constraints(x);
     for it in 0..=opts.max_iterations {
         let ta = Instant::now();
@@ -405,67 +453,140 @@ pub fn newton(
         if it == opts.max_iterations {
             break;
         }
-        let tf = Instant::now();
-        let (llt, shift) = system.factor(&mut values)?;
-        report.factorizations += 1;
-        if shift > 0.0 {
-            report.shifted_steps += 1;
+        // stagnation: three Newton steps with ≤ 0.1 % energy drop and no tenfold residual drop
+        if let (Mode::Newton, true) = (&mode, history.len() >= 3) {
+            let (e0, r0) = history[history.len() - 3];
+            if e0 - energy <= 1e-3 * e0.abs() && gnorm > 0.1 * r0 && opts.fallback {
+                report.fallbacks.stagnation += 1;
+                mode = Mode::BackwardEuler;
+                history.clear();
+            }
         }
+        let tf = Instant::now();
+        let llt = match mode {
+            Mode::Newton => match system.try_factor(&values)? {
+                Some(llt) => llt,
+                None => {
+                    report.factorizations += 1;
+                    if !opts.fallback {
+                        return Err(SolveError::Indefinite {
+                            residual: report.residual,
+                        });
+                    }
+                    report.fallbacks.indefinite += 1;
+                    mode = Mode::BackwardEuler;
+                    history.clear();
+                    backward_euler_factor(system, &mut values, &mass, &mut mu, &mut report)?
+                }
+            },
+            Mode::BackwardEuler => {
+                backward_euler_factor(system, &mut values, &mass, &mut mu, &mut report)?
+            }
+        };
+        report.factorizations += 1;
         for (di, gi) in d.iter_mut().zip(&gf) {
             *di = -gi;
         }
+        let rhs = d.clone();
         llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut d, nf, 1));
-        // residual check, with one step of refinement when it is poor
-        system.sym_mul(&values, &d, &mut check);
-        let res: f64 = check
-            .iter()
-            .zip(&gf)
-            .map(|(a, g)| (a + g).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if res > 1e-8 * gnorm {
-            let mut corr: Vec<f64> = check.iter().zip(&gf).map(|(a, g)| -(a + g)).collect();
-            llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut corr, nf, 1));
-            for (di, ci) in d.iter_mut().zip(&corr) {
-                *di += ci;
-            }
+        if opts.refine_steps > 0 {
+            let rep = refine::refine(
+                &system.sym_lower(&values),
+                &rhs,
+                &mut d,
+                opts.precision,
+                opts.refine_steps,
+                |r| llt.solve_in_place(MatMut::from_column_major_slice_mut(r, nf, 1)),
+            );
+            report.refinement_steps += rep.steps;
         }
         report.factor_seconds += tf.elapsed().as_secs_f64();
         let slope: f64 = d.iter().zip(&gf).map(|(a, b)| a * b).sum();
-        if slope.is_nan() || slope >= 0.0 {
-            return Err(SolveError::Stalled {
-                residual: report.residual,
-            });
-        }
-        // backtracking (Armijo) line search
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        for _ in 0..40 {
-            trial.copy_from_slice(x);
-            system.step(&mut trial, &d, alpha);
-            if let Ok(e) = model.energy(&trial) {
-                // accept a decrease, or a change below round-off of the energy (final steps)
-                if e <= energy + 1e-4 * alpha * slope
-                    || (e - energy).abs() <= 1e-14 * energy.abs().max(f64::MIN_POSITIVE)
-                {
-                    accepted = true;
-                    break;
+        let descent = slope < 0.0;
+        // backtracking (Armijo) line search on the energy
+        let mut accepted = None;
+        if descent {
+            let mut alpha = 1.0;
+            for _ in 0..40 {
+                trial.copy_from_slice(x);
+                system.step(&mut trial, &d, alpha);
+                if let Ok(e) = model.energy(&trial) {
+                    // accept a decrease, or a change below round-off of the energy
+                    if e <= energy + 1e-4 * alpha * slope
+                        || (e - energy).abs() <= 1e-14 * energy.abs().max(f64::MIN_POSITIVE)
+                    {
+                        accepted = Some(e);
+                        break;
+                    }
                 }
+                alpha *= 0.5;
+                report.backtracks += 1;
             }
-            alpha *= 0.5;
-            report.backtracks += 1;
         }
-        if !accepted {
-            return Err(SolveError::Stalled {
-                residual: report.residual,
-            });
+        match (accepted, &mode) {
+            (Some(e), Mode::Newton) => {
+                x.copy_from_slice(&trial);
+                history.push((e, gnorm));
+            }
+            (Some(_), Mode::BackwardEuler) => {
+                x.copy_from_slice(&trial);
+                report.backward_euler_steps += 1;
+                mu *= 0.25;
+                mode = Mode::Newton;
+            }
+            (None, Mode::Newton) => {
+                if !opts.fallback {
+                    return Err(SolveError::Stalled {
+                        residual: report.residual,
+                    });
+                }
+                report.fallbacks.ascent += 1;
+                mode = Mode::BackwardEuler;
+                history.clear();
+            }
+            (None, Mode::BackwardEuler) => {
+                // a stiffer regularisation gives a shorter, safer step
+                mu = if mu > 0.0 { 10.0 * mu } else { 1.0 };
+            }
         }
-        x.copy_from_slice(&trial);
     }
     Err(SolveError::NotConverged {
         iterations: opts.max_iterations,
         residual: report.residual,
     })
+}
+
+/// Factorises H + μM, raising μ tenfold until the factorisation succeeds. `values` comes back
+/// holding H + μM.
+fn backward_euler_factor(
+    system: &FreeSystem,
+    values: &mut [f64],
+    mass: &[f64],
+    mu: &mut f64,
+    report: &mut SolveReport,
+) -> Result<Llt<usize, f64>, SolveError> {
+    let mean_diag =
+        system.diag.iter().map(|&k| values[k].abs()).sum::<f64>() / system.diag.len().max(1) as f64;
+    let mean_mass = mass.iter().sum::<f64>() / mass.len().max(1) as f64;
+    if !(*mu > 0.0) || !mu.is_finite() {
+        // start where the mass term is a thousandth of the stiffness
+        *mu = 1e-3 * mean_diag / mean_mass.max(f64::MIN_POSITIVE);
+    }
+    let mut applied = 0.0;
+    for _ in 0..40 {
+        for (&k, &m) in system.diag.iter().zip(mass) {
+            values[k] += (*mu - applied) * m;
+        }
+        applied = *mu;
+        if let Some(llt) = system.try_factor(values)? {
+            return Ok(llt);
+        }
+        report.factorizations += 1;
+        *mu *= 10.0;
+    }
+    Err(SolveError::Linear(
+        "no backward-Euler step size makes the system positive definite".into(),
+    ))
 }
 
 /// What a continuation did.
