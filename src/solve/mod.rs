@@ -568,7 +568,7 @@ fn backward_euler_factor(
     let mean_diag =
         system.diag.iter().map(|&k| values[k].abs()).sum::<f64>() / system.diag.len().max(1) as f64;
     let mean_mass = mass.iter().sum::<f64>() / mass.len().max(1) as f64;
-    if !(*mu > 0.0) || !mu.is_finite() {
+    if !mu.is_finite() || *mu <= 0.0 {
         // start where the mass term is a thousandth of the stiffness
         *mu = 1e-3 * mean_diag / mean_mass.max(f64::MIN_POSITIVE);
     }
