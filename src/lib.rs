@@ -13,6 +13,7 @@
 //! plain structs of arrays; see `DESIGN.md` in the repository for the map.
 
 pub mod assembly;
+pub mod atlas;
 pub mod material;
 pub mod mesh;
 pub mod quadrature;

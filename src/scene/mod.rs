@@ -8,7 +8,8 @@ use crate::assembly::{ModelError, ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::rectangular_grid;
 use crate::solve::{
-    continuation, newton, FreeSystem, NewtonOptions, Slave, SolveError, SolveReport,
+    continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, Slave, SolveError,
+    SolveReport,
 };
 use crate::subdiv::{BasisBuildError, BasisOptions, BoundaryRule, LimitBasis};
 use crate::Vec3;
@@ -207,6 +208,7 @@ pub struct TensileStrip {
     pub angle_deg: f64,
     pub mesh: (usize, usize),
     pub boundary: BoundaryRule,
+    pub solver: NewtonOptions,
 }
 
 /// One point of a virtual tensile curve.
@@ -227,6 +229,7 @@ impl TensileStrip {
             angle_deg,
             mesh: default_mesh(width, length),
             boundary: BoundaryRule::Phantom,
+            solver: NewtonOptions::default(),
         }
     }
 
@@ -300,13 +303,12 @@ impl TensileStrip {
             }
             let offsets: Vec<f64> = base.iter().zip(&rate).map(|(b, r)| b + r * dl).collect();
             system.set_offsets(&offsets);
-            let report =
-                newton(&model, &system, &mut x, &NewtonOptions::default()).map_err(|source| {
-                    SceneError::Solve {
-                        stage: format!("elongation {:.4} mm", dl * 1e3),
-                        source,
-                    }
-                })?;
+            let report = newton(&model, &system, &mut x, &self.solver).map_err(|source| {
+                SceneError::Solve {
+                    stage: format!("elongation {:.4} mm", dl * 1e3),
+                    source,
+                }
+            })?;
             model
                 .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
                 .map_err(|e| SceneError::Solve {
@@ -347,6 +349,9 @@ pub struct CantileverBend {
     pub gravity: bool,
     /// Total dead force on the free edge, spread uniformly along it, N (zero for ASTM D1388).
     pub tip_force: Vec3,
+    pub solver: NewtonOptions,
+    /// Raise the load gradually (default); otherwise apply it all in one solve.
+    pub continuation: bool,
 }
 
 /// The measured bend.
@@ -357,6 +362,8 @@ pub struct BendResult {
     /// Tip position (mid-width of the free edge), m.
     pub tip: Vec3,
     pub load_steps: usize,
+    /// Newton iterations over all load steps (failed attempts included).
+    pub iterations: usize,
     pub report: SolveReport,
 }
 
@@ -373,6 +380,8 @@ impl CantileverBend {
             boundary: BoundaryRule::Ghost,
             gravity: true,
             tip_force: [0.0; 3],
+            solver: NewtonOptions::default(),
+            continuation: true,
         }
     }
 
@@ -419,14 +428,32 @@ impl CantileverBend {
         let per_length = self.tip_force.map(|f| f / self.width);
         let tip_load = model.edge_load(&tip_faces, 1.0, per_length);
         let g = if self.gravity { STANDARD_GRAVITY } else { 0.0 };
-        let cont = continuation(&mut model, &system, &mut x, |m, t| {
+        let apply = |m: &mut ShellModel, t: f64| {
             m.set_gravity([0.0, 0.0, -g * t]);
             m.set_dead_load(tip_load.iter().map(|f| f.map(|c| c * t)).collect());
-        })
-        .map_err(|(t, source)| SceneError::Solve {
-            stage: format!("load factor {t:.4}"),
-            source,
-        })?;
+        };
+        let cont = if self.continuation {
+            continuation(&mut model, &system, &mut x, &self.solver, apply).map_err(
+                |(t, source)| SceneError::Solve {
+                    stage: format!("load factor {t:.4}"),
+                    source,
+                },
+            )?
+        } else {
+            let apply = apply;
+            apply(&mut model, 1.0);
+            let last = newton(&model, &system, &mut x, &self.solver).map_err(|source| {
+                SceneError::Solve {
+                    stage: "full load in one step".into(),
+                    source,
+                }
+            })?;
+            ContinuationReport {
+                steps: 1,
+                iterations: last.iterations,
+                last,
+            }
+        };
         let surface = model.basis.surface();
         let mid = nx / 2;
         let (face_edge, u_edge) = if nx % 2 == 0 { (mid, 0.0) } else { (mid, 0.5) };
@@ -443,6 +470,7 @@ impl CantileverBend {
             drape_angle_deg: angle,
             tip,
             load_steps: cont.steps,
+            iterations: cont.iterations,
             report: cont.last,
         })
     }

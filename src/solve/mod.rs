@@ -297,7 +297,7 @@ impl FreeSystem {
 }
 
 /// Newton settings.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NewtonOptions {
     pub max_iterations: usize,
     /// Relative residual target (see the module docs).
@@ -344,6 +344,8 @@ pub struct FallbackCounts {
     /// Three consecutive Newton steps lowered the energy by ≤ 0.1 % in all without the residual
     /// falling tenfold.
     pub stagnation: usize,
+    /// The line search cut a Newton step below 1/8 (our addition to the paper's triggers).
+    pub short_step: usize,
 }
 
 /// What a solve did.
@@ -368,6 +370,10 @@ pub struct SolveReport {
     pub seconds: f64,
     /// Converged at the round-off floor of the force evaluation rather than by `rtol`.
     pub precision_limited: bool,
+    /// The Hessian is positive definite at the solution (a stable equilibrium).
+    pub stable: bool,
+    /// Times an unstable equilibrium (a saddle) was perturbed and the solve continued.
+    pub saddle_escapes: usize,
 }
 
 fn norm(v: &[f64]) -> f64 {
@@ -385,9 +391,12 @@ enum Mode {
 /// Each iteration assembles energy, gradient and Hessian and tests convergence. A Newton step
 /// solves H d = −g (Cholesky, refined); a backward-Euler step solves (H + μM) d = −g, the
 /// linearised minimiser of E(x) + μ/2 ‖x − x̂‖²_M (μ = 1/h², M the lumped mass), with μ raised
-/// tenfold until the factorisation succeeds and lowered fourfold after each use. Both are
-/// followed by a backtracking line search on the energy. After a backward-Euler step the solver
-/// tries Newton again.
+/// tenfold until the factorisation succeeds. Both are followed by a backtracking line search on
+/// the energy. Backward Euler takes over when the Hessian is not positive definite, when the
+/// Newton step is not a descent direction, when three Newton steps lower the energy by ≤ 0.1 %
+/// without the residual falling tenfold (the paper's triggers), and when the line search cuts a
+/// Newton step below 1/8. After each backward-Euler step Newton is tried again; h is adapted
+/// like a trust region (μ ÷ 4 after a full step, × 4 after a cut one) and kept between uses.
 pub fn newton(
     model: &ShellModel,
     system: &FreeSystem,
@@ -412,6 +421,8 @@ pub fn newton(
     let mut d = vec![0.0; nf];
     let mut mode = Mode::Newton;
     let mut mu = 0.0f64;
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    let mut be_energy: Vec<f64> = Vec::new();
     // (energy, residual) after recent Newton steps, for the stagnation rule
     let mut history: Vec<(f64, f64)> = Vec::new();
     system.apply_constraints(x);
@@ -447,6 +458,17 @@ pub fn newton(
         let floor = 2.0 * f64::EPSILON * diag_norm * xmax;
         if gnorm <= opts.rtol * scale || gnorm <= floor || gnorm == 0.0 {
             report.precision_limited = gnorm > opts.rtol * scale;
+            // an equilibrium whose Hessian is not positive definite is a saddle (a flat strip in
+            // compression, held there by its own symmetry): nudge it off and go on
+            let stable = system.try_factor(&values)?.is_some();
+            if !stable && opts.fallback && report.saddle_escapes < 5 && it < opts.max_iterations {
+                report.saddle_escapes += 1;
+                perturb(system, x, &mut seed);
+                mode = Mode::BackwardEuler;
+                history.clear();
+                continue;
+            }
+            report.stable = stable;
             report.seconds = t0.elapsed().as_secs_f64();
             return Ok(report);
         }
@@ -505,8 +527,8 @@ pub fn newton(
         let descent = slope < 0.0;
         // backtracking (Armijo) line search on the energy
         let mut accepted = None;
+        let mut alpha = 1.0;
         if descent {
-            let mut alpha = 1.0;
             for _ in 0..40 {
                 trial.copy_from_slice(x);
                 system.step(&mut trial, &d, alpha);
@@ -527,11 +549,39 @@ pub fn newton(
             (Some(e), Mode::Newton) => {
                 x.copy_from_slice(&trial);
                 history.push((e, gnorm));
+                be_energy.clear();
+                // a Newton step the line search had to cut below 1/8 is not trusted: the
+                // quadratic model is poor here (large rotations of a thin shell, say)
+                if alpha < 0.125 && opts.fallback {
+                    report.fallbacks.short_step += 1;
+                    mode = Mode::BackwardEuler;
+                    history.clear();
+                }
             }
-            (Some(_), Mode::BackwardEuler) => {
+            (Some(e), Mode::BackwardEuler) => {
                 x.copy_from_slice(&trial);
                 report.backward_euler_steps += 1;
-                mu *= 0.25;
+                // creeping towards a saddle: the Hessian stays indefinite (we are in backward
+                // Euler because Newton's factorisation failed) while the energy no longer
+                // moves; the symmetric state will not leave by itself, so nudge it
+                be_energy.push(e);
+                let n = be_energy.len();
+                if n >= 8
+                    && (be_energy[n - 8] - e).abs() <= 1e-7 * e.abs()
+                    && report.saddle_escapes < 5
+                {
+                    report.saddle_escapes += 1;
+                    perturb(system, x, &mut seed);
+                    be_energy.clear();
+                }
+                // trust-region-like control of the step size h = 1/√μ: longer after a full
+                // step, shorter after a cut one; then try Newton again (if the Hessian is still
+                // indefinite the next factorisation sends us straight back, with this μ)
+                if alpha == 1.0 {
+                    mu *= 0.25;
+                } else {
+                    mu *= 4.0;
+                }
                 mode = Mode::Newton;
             }
             (None, Mode::Newton) => {
@@ -554,6 +604,27 @@ pub fn newton(
         iterations: opts.max_iterations,
         residual: report.residual,
     })
+}
+
+/// Moves every free DOF by a pseudo-random amount of 1e-6 of the body's size (deterministic).
+fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
+    let (lo, hi) = x
+        .iter()
+        .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
+            (
+                std::array::from_fn(|c| lo[c].min(p[c])),
+                std::array::from_fn(|c| hi[c].max(p[c])),
+            )
+        });
+    let size = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
+    let mut d = vec![0.0; system.num_free];
+    for v in d.iter_mut() {
+        *seed ^= *seed << 13;
+        *seed ^= *seed >> 7;
+        *seed ^= *seed << 17;
+        *v = ((*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2e-6 * size;
+    }
+    system.step(x, &d, 1.0);
 }
 
 /// Factorises H + μM, raising μ tenfold until the factorisation succeeds. `values` comes back
@@ -609,11 +680,12 @@ pub fn continuation(
     model: &mut ShellModel,
     system: &FreeSystem,
     x: &mut Vec<Vec3>,
+    solver: &NewtonOptions,
     mut apply: impl FnMut(&mut ShellModel, f64),
 ) -> Result<ContinuationReport, (f64, SolveError)> {
     let opts = NewtonOptions {
-        max_iterations: 30,
-        ..NewtonOptions::default()
+        max_iterations: solver.max_iterations.min(30),
+        ..*solver
     };
     let (mut factor, mut step) = (0.0f64, 0.125f64);
     let mut report = ContinuationReport::default();
