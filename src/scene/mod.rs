@@ -440,7 +440,6 @@ impl CantileverBend {
                 },
             )?
         } else {
-            let apply = apply;
             apply(&mut model, 1.0);
             let last = newton(&model, &system, &mut x, &self.solver).map_err(|source| {
                 SceneError::Solve {
