@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 use kshell::material::load_material;
 use kshell::mesh::{read_obj, shapes, write_obj, PolyMesh, Topology};
 use kshell::scene::{CantileverBend, TensileStrip};
+use kshell::solve::{NewtonOptions, Precision};
 use kshell::subdiv::{refine_uniform, BoundaryRule, FaceKind, LimitBasis, LimitSurface};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -73,6 +74,12 @@ enum Command {
         /// Report each solve on stderr.
         #[arg(short, long)]
         verbose: bool,
+        /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
+        #[arg(long, default_value = "dd")]
+        precision: Precision,
+        /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
+        #[arg(long)]
+        plain_newton: bool,
     },
     /// Virtual ASTM D1388 cantilever: prints CSV `overhang_mm,drape_angle_deg`.
     Bend {
@@ -97,9 +104,45 @@ enum Command {
         /// Report the solve on stderr.
         #[arg(short, long)]
         verbose: bool,
+        /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
+        #[arg(long, default_value = "dd")]
+        precision: Precision,
+        /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
+        #[arg(long)]
+        plain_newton: bool,
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+}
+
+fn solver_options(precision: Precision, plain: bool) -> NewtonOptions {
+    if plain {
+        NewtonOptions::plain()
+    } else {
+        NewtonOptions {
+            precision,
+            ..NewtonOptions::default()
+        }
+    }
+}
+
+/// One line describing a solve, for --verbose.
+fn describe(r: &kshell::solve::SolveReport) -> String {
+    format!(
+        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {:.1} ms",
+        r.iterations,
+        r.backward_euler_steps,
+        r.fallbacks.indefinite,
+        r.fallbacks.ascent,
+        r.fallbacks.stagnation,
+        r.fallbacks.short_step,
+        r.refinement_steps,
+        r.precision,
+        r.residual,
+        if r.precision_limited { " (round-off floor)" } else { "" },
+        if r.saddle_escapes > 0 { format!(", {} saddle escapes", r.saddle_escapes) } else { String::new() },
+        r.seconds * 1e3
+    )
 }
 
 /// "NXxNY" → (NX, NY), both at least 1.
@@ -153,8 +196,19 @@ fn main() -> ExitCode {
             mesh,
             boundary,
             verbose,
+            precision,
+            plain_newton,
         } => cmd_tensile(
-            &material, angle, width, length, to, steps, mesh, boundary, verbose,
+            &material,
+            angle,
+            width,
+            length,
+            to,
+            steps,
+            mesh,
+            boundary,
+            verbose,
+            solver_options(precision, plain_newton),
         ),
         Command::Bend {
             material,
@@ -164,7 +218,18 @@ fn main() -> ExitCode {
             mesh,
             boundary,
             verbose,
-        } => cmd_bend(&material, angle, overhang, width, mesh, boundary, verbose),
+            precision,
+            plain_newton,
+        } => cmd_bend(
+            &material,
+            angle,
+            overhang,
+            width,
+            mesh,
+            boundary,
+            verbose,
+            solver_options(precision, plain_newton),
+        ),
         Command::Demo => cmd_demo(),
     };
     match result {
@@ -258,6 +323,7 @@ fn cmd_tensile(
     mesh: Option<(usize, usize)>,
     boundary: BoundaryRule,
     verbose: bool,
+    solver: NewtonOptions,
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
@@ -272,25 +338,24 @@ fn cmd_tensile(
         strip.mesh = m;
     }
     strip.boundary = boundary;
+    strip.solver = solver;
     let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
     let curve = strip.run(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
     for p in &curve {
         println!("{},{}", p.elongation * 1e3, p.force);
         if verbose {
-            let r = &p.report;
             eprintln!(
-                "elongation {:.4} mm: {} Newton iterations, residual {:.1e}, {:.1} ms",
+                "elongation {:.4} mm: {}",
                 p.elongation * 1e3,
-                r.iterations,
-                r.residual,
-                r.seconds * 1e3
+                describe(&p.report)
             );
         }
     }
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn cmd_bend(
     material: &std::path::Path,
     angle: f64,
@@ -299,6 +364,7 @@ fn cmd_bend(
     mesh: Option<(usize, usize)>,
     boundary: BoundaryRule,
     verbose: bool,
+    solver: NewtonOptions,
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
@@ -313,11 +379,14 @@ fn cmd_bend(
         bend.mesh = m;
     }
     bend.boundary = boundary;
+    bend.solver = solver;
     let r = bend.run(&mat).map_err(|e| e.to_string())?;
     if verbose {
         eprintln!(
-            "{} gravity steps; last solve {} Newton iterations, residual {:.1e}",
-            r.load_steps, r.report.iterations, r.report.residual
+            "{} load steps, {} iterations in all; last solve: {}",
+            r.load_steps,
+            r.iterations,
+            describe(&r.report)
         );
     }
     println!("overhang_mm,drape_angle_deg");

@@ -1,0 +1,100 @@
+//! The paper's orthotropic law in the virtual lab: symmetries of the strip test and a
+//! stiffening bias strip pulled to 30 %.
+
+use kshell::material::{parse_material, FabricMaterial};
+use kshell::scene::TensileStrip;
+
+const STIFFENING: &str = r#"
+name = "stiffening"
+areal_density_g_m2 = 150
+thickness_mm = 0.2
+a11_pa = 1.0e8
+a22_pa = 6.0e7
+a12_pa = 1.0e7
+g12_pa = 1.5e6
+[warp]
+mu = [0.6, 0.3, 0.1]
+alpha = [1.0, 6.0, 14.0]
+[weft]
+mu = [0.5, 0.4, 0.1]
+alpha = [1.0, 5.0, 12.0]
+[shear]
+mu = [0.7, 0.2, 0.1]
+alpha = [1.0, 4.0, 10.0]
+"#;
+
+fn material() -> FabricMaterial {
+    parse_material(STIFFENING, "stiffening.toml").unwrap()
+}
+
+fn forces(angle: f64, dl: &[f64]) -> Vec<f64> {
+    let mut strip = TensileStrip::new(0.05, 0.075, angle);
+    strip.mesh = (6, 9);
+    strip
+        .run(&material(), dl)
+        .unwrap()
+        .iter()
+        .map(|p| p.force)
+        .collect()
+}
+
+#[test]
+fn a_strip_and_its_half_turn_are_the_same_test() {
+    let dl = [0.002, 0.005];
+    for angle in [0.0, 30.0, 45.0, 90.0] {
+        let (a, b) = (forces(angle, &dl), forces(angle + 180.0, &dl));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x / y - 1.0).abs() < 1e-9, "{angle}°: {x} vs {y}");
+        }
+    }
+}
+
+#[test]
+fn mirrored_cut_angles_give_the_same_curve() {
+    // the law depends on Ẽ12 only through Ẽ12², so a strip cut at −θ is the mirror image of
+    // one cut at θ (on a mirror-symmetric mesh)
+    let dl = [0.002, 0.005];
+    for angle in [22.5, 30.0, 67.5] {
+        let (a, b) = (forces(angle, &dl), forces(-angle, &dl));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x / y - 1.0).abs() < 1e-8, "±{angle}°: {x} vs {y}");
+        }
+    }
+}
+
+#[test]
+fn stiffening_bias_strip_reaches_30_percent_with_rising_force() {
+    let dir = std::env::temp_dir().join(format!("kshell-ortho-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("stiffening.toml");
+    std::fs::write(&path, STIFFENING).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ks-fit"))
+        .args([
+            "tensile",
+            "--material",
+            path.to_str().unwrap(),
+            "--angle",
+            "45",
+            "--width",
+            "50",
+        ])
+        .args(["--length", "75", "--to", "22.5", "--steps", "6"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let f: Vec<f64> = stdout
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(1).unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(f.len(), 6);
+    assert!(f[0] > 0.0);
+    for w in f.windows(2) {
+        assert!(w[1] > w[0], "force must rise: {f:?}");
+    }
+}
