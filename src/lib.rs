@@ -14,6 +14,7 @@
 
 pub mod assembly;
 pub mod atlas;
+pub mod converge;
 pub mod material;
 pub mod mesh;
 pub mod quadrature;

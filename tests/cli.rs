@@ -264,3 +264,64 @@ fn scene_commands_reject_bad_input_with_exit_code_2() {
     assert_eq!(rc, 2);
     assert!(err.contains("--overhang must be a positive"), "{err}");
 }
+
+#[test]
+fn converge_prints_a_table_and_writes_csv_and_svg() {
+    let m = temp_file(
+        "converge.toml",
+        "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\ng12_pa = 2e6\n",
+    );
+    let dir = std::env::temp_dir().join(format!("kshell-conv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, svg) = (dir.join("c.csv"), dir.join("c.svg"));
+    let (rc, out, err) = ks_fit(&[
+        "converge",
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "90",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--elongation",
+        "3",
+        "--mesh-ladder",
+        "2x3,4x6,8x12",
+        "--tol",
+        "0.5",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let header = out.lines().next().unwrap();
+    for col in ["mesh", "dofs", "seconds", "qoi", "est_error", "order"] {
+        assert!(header.split_whitespace().any(|c| c == col), "{header}");
+    }
+    assert!(
+        out.contains("coarsest mesh with estimated error below"),
+        "{out}"
+    );
+    assert!(std::fs::read_to_string(&csv)
+        .unwrap()
+        .starts_with("mesh,nx,ny,dofs,seconds,qoi"));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    assert!(err.contains("8x12 done"), "progress on stderr: {err}");
+    let (rc, _, err) = ks_fit(&[
+        "converge",
+        "bend",
+        "--material",
+        &m,
+        "--angle",
+        "0",
+        "--overhang",
+        "40",
+        "--mesh-ladder",
+        "4xx",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("--mesh-ladder"), "{err}");
+}

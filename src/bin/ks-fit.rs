@@ -111,8 +111,73 @@ enum Command {
         #[arg(long)]
         plain_newton: bool,
     },
+    /// Mesh-refinement study of a virtual test: table of QoI, Richardson estimate, observed
+    /// order; optionally the coarsest mesh meeting a tolerance, CSV and an SVG chart.
+    Converge {
+        #[command(subcommand)]
+        scene: ConvergeScene,
+    },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+}
+
+#[derive(Subcommand)]
+enum ConvergeScene {
+    /// QoI: the clamp force at the given elongation.
+    Tensile {
+        #[arg(long)]
+        material: PathBuf,
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Strip width, mm.
+        #[arg(long)]
+        width: f64,
+        /// Gauge length, mm.
+        #[arg(long)]
+        length: f64,
+        /// Elongation at which the force is compared, mm.
+        #[arg(long)]
+        elongation: f64,
+        #[command(flatten)]
+        study: StudyArgs,
+    },
+    /// QoI: the drape angle.
+    Bend {
+        #[arg(long)]
+        material: PathBuf,
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Overhang, mm.
+        #[arg(long)]
+        overhang: f64,
+        /// Strip width, mm.
+        #[arg(long, default_value_t = 25.0)]
+        width: f64,
+        #[command(flatten)]
+        study: StudyArgs,
+    },
+}
+
+#[derive(clap::Args)]
+struct StudyArgs {
+    /// Number of meshes in the default ladder (4×6, 8×12, … scaled to the aspect ratio).
+    #[arg(long, default_value_t = 5)]
+    levels: usize,
+    /// Explicit ladder, e.g. 4x6,8x12,16x24 (each twice as fine as the last).
+    #[arg(long)]
+    mesh_ladder: Option<String>,
+    /// Also name the coarsest mesh whose estimated relative error is below this.
+    #[arg(long)]
+    tol: Option<f64>,
+    /// Write the table as CSV.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Write an SVG chart of error against DOFs and against time.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Boundary treatment of the limit surface: phantom or ghost (default: the scene's own).
+    #[arg(long)]
+    boundary: Option<BoundaryRule>,
 }
 
 fn solver_options(precision: Precision, plain: bool) -> NewtonOptions {
@@ -230,6 +295,7 @@ fn main() -> ExitCode {
             verbose,
             solver_options(precision, plain_newton),
         ),
+        Command::Converge { scene } => cmd_converge(scene),
         Command::Demo => cmd_demo(),
     };
     match result {
@@ -391,6 +457,144 @@ fn cmd_bend(
     }
     println!("overhang_mm,drape_angle_deg");
     println!("{},{}", overhang, r.drape_angle_deg);
+    Ok(())
+}
+
+fn cmd_converge(scene: ConvergeScene) -> Result<(), String> {
+    use kshell::converge::{default_ladder, parse_ladder, study};
+    let (study_args, aspect, title) = match &scene {
+        ConvergeScene::Tensile {
+            study,
+            width,
+            length,
+            angle,
+            elongation,
+            ..
+        } => (
+            study,
+            length / width,
+            format!("tensile {angle}°, {width} x {length} mm, force at {elongation} mm"),
+        ),
+        ConvergeScene::Bend {
+            study,
+            width,
+            overhang,
+            angle,
+            ..
+        } => (
+            study,
+            overhang / width,
+            format!("cantilever {angle}°, {width} mm wide, overhang {overhang} mm"),
+        ),
+    };
+    if !aspect.is_finite() || aspect <= 0.0 {
+        return Err("width and length/overhang must be positive".into());
+    }
+    let ladder = match &study_args.mesh_ladder {
+        Some(l) => parse_ladder(l).map_err(|e| format!("--mesh-ladder: {e}"))?,
+        None => {
+            if study_args.levels == 0 {
+                return Err("--levels must be at least 1".into());
+            }
+            default_ladder(aspect, study_args.levels)
+        }
+    };
+    if let Some(t) = study_args.tol {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(format!("--tol must be a positive number, got {t}"));
+        }
+    }
+    let dofs = |(nx, ny): (usize, usize), rule: BoundaryRule| match rule {
+        BoundaryRule::Phantom => 3 * (nx + 1) * (ny + 1),
+        BoundaryRule::Ghost => 3 * (nx + 3) * (ny + 3),
+    };
+    let progress = |l: &kshell::converge::Level| {
+        eprintln!(
+            "ks-fit: {}x{} done: qoi {:.12e} in {:.2} s",
+            l.mesh.0, l.mesh.1, l.qoi, l.seconds
+        )
+    };
+    let result = match &scene {
+        ConvergeScene::Tensile {
+            material,
+            angle,
+            width,
+            length,
+            elongation,
+            study: a,
+        } => {
+            let mat = load_material(material).map_err(|e| e.to_string())?;
+            let (w, l, e) = (
+                mm("width", *width)?,
+                mm("length", *length)?,
+                mm("elongation", *elongation)?,
+            );
+            // steps of at most 5 % strain
+            let n = ((e / l) / 0.05).ceil().max(1.0) as usize;
+            let dl: Vec<f64> = (1..=n).map(|i| e * i as f64 / n as f64).collect();
+            study(
+                &ladder,
+                |mesh| {
+                    let mut strip = TensileStrip::new(w, l, *angle);
+                    strip.mesh = mesh;
+                    if let Some(b) = a.boundary {
+                        strip.boundary = b;
+                    }
+                    let curve = strip
+                        .run(&mat, &dl)
+                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
+                    Ok::<_, String>((
+                        curve.last().map(|p| p.force).unwrap_or(0.0),
+                        dofs(mesh, strip.boundary),
+                    ))
+                },
+                progress,
+            )?
+        }
+        ConvergeScene::Bend {
+            material,
+            angle,
+            overhang,
+            width,
+            study: a,
+        } => {
+            let mat = load_material(material).map_err(|e| e.to_string())?;
+            let (w, l) = (mm("width", *width)?, mm("overhang", *overhang)?);
+            study(
+                &ladder,
+                |mesh| {
+                    let mut bend = CantileverBend::new(w, l, *angle);
+                    bend.mesh = (mesh.0, mesh.1.max(2));
+                    if let Some(b) = a.boundary {
+                        bend.boundary = b;
+                    }
+                    let r = bend
+                        .run(&mat)
+                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
+                    Ok::<_, String>((r.drape_angle_deg, dofs(bend.mesh, bend.boundary)))
+                },
+                progress,
+            )?
+        }
+    };
+    print!("{}", result.table());
+    if let Some(t) = study_args.tol {
+        match result.pick(t) {
+            Some(l) => println!(
+                "coarsest mesh with estimated error below {t:e}: {}x{} ({} DOFs, {:.2} s)",
+                l.mesh.0, l.mesh.1, l.dofs, l.seconds
+            ),
+            None => println!("no mesh of this ladder has an estimated error below {t:e}"),
+        }
+    }
+    if let Some(p) = &study_args.csv {
+        std::fs::write(p, result.csv())
+            .map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+    }
+    if let Some(p) = &study_args.plot {
+        let svg = result.svg(&title)?;
+        std::fs::write(p, svg).map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+    }
     Ok(())
 }
 

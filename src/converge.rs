@@ -1,0 +1,267 @@
+//! Mesh-refinement studies: run one scene over a ladder of meshes, each twice as fine as the
+//! last, and estimate the converged value, the error of each level and the observed order.
+//!
+//! With refinement ratio 2 and three consecutive values q₀, q₁, q₂ (coarse to fine), the
+//! observed order is p = log₂(|q₀ − q₁| / |q₁ − q₂|) and Richardson's estimate of the limit is
+//! q∞ = q₂ + (q₂ − q₁)/(2ᵖ − 1). Each level's estimated error is |q − q∞| / |q∞|, using the
+//! estimate from the finest triple; the order is reported for each triple, at its middle level.
+
+use std::time::Instant;
+
+/// One rung of the ladder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Level {
+    pub mesh: (usize, usize),
+    pub dofs: usize,
+    pub seconds: f64,
+    pub qoi: f64,
+    /// q(next finer) − q(this)
+    pub diff_to_next: Option<f64>,
+    /// |q − q∞| / |q∞| with the finest Richardson estimate
+    pub est_error: Option<f64>,
+    /// observed order of the triple centred here
+    pub order: Option<f64>,
+}
+
+/// A whole study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Study {
+    pub levels: Vec<Level>,
+    /// Richardson estimate of the converged value (needs three levels).
+    pub extrapolated: Option<f64>,
+}
+
+/// The default ladder: (nx, ny) = (4, round(4 · aspect)) · 2^k for k = 0..levels, `aspect`
+/// being length / width (4 × 6, 8 × 12, … for a 50 × 75 mm strip). Every rung is exactly twice
+/// as fine as the last, as Richardson extrapolation assumes.
+pub fn default_ladder(aspect: f64, levels: usize) -> Vec<(usize, usize)> {
+    let ny0 = ((4.0 * aspect).round() as usize).max(1);
+    (0..levels).map(|k| (4usize << k, ny0 << k)).collect()
+}
+
+/// Parses "4x6,8x12,16x24".
+pub fn parse_ladder(s: &str) -> Result<Vec<(usize, usize)>, String> {
+    s.split(',')
+        .map(|m| {
+            let bad = || format!("mesh ladder entries look like 8x12, got '{m}'");
+            let (a, b) = m.trim().split_once(['x', 'X']).ok_or_else(bad)?;
+            let (nx, ny) = (
+                a.trim().parse::<usize>().map_err(|_| bad())?,
+                b.trim().parse::<usize>().map_err(|_| bad())?,
+            );
+            if nx == 0 || ny == 0 {
+                return Err(bad());
+            }
+            Ok((nx, ny))
+        })
+        .collect()
+}
+
+/// Runs `scene(mesh) -> (qoi, dofs)` on each mesh (calling `progress` after each) and analyses
+/// the results.
+pub fn study<E>(
+    ladder: &[(usize, usize)],
+    mut scene: impl FnMut((usize, usize)) -> Result<(f64, usize), E>,
+    mut progress: impl FnMut(&Level),
+) -> Result<Study, E> {
+    let mut levels = Vec::with_capacity(ladder.len());
+    for &mesh in ladder {
+        let t0 = Instant::now();
+        let (qoi, dofs) = scene(mesh)?;
+        let level = Level {
+            mesh,
+            dofs,
+            seconds: t0.elapsed().as_secs_f64(),
+            qoi,
+            diff_to_next: None,
+            est_error: None,
+            order: None,
+        };
+        progress(&level);
+        levels.push(level);
+    }
+    Ok(analyse(levels))
+}
+
+/// Differences, orders and the Richardson estimate of measured levels.
+pub fn analyse(mut levels: Vec<Level>) -> Study {
+    let n = levels.len();
+    for i in 0..n.saturating_sub(1) {
+        levels[i].diff_to_next = Some(levels[i + 1].qoi - levels[i].qoi);
+    }
+    let mut extrapolated = None;
+    for i in 1..n.saturating_sub(1) {
+        let (q0, q1, q2) = (levels[i - 1].qoi, levels[i].qoi, levels[i + 1].qoi);
+        let (d0, d1) = ((q0 - q1).abs(), (q1 - q2).abs());
+        if d0 > 0.0 && d1 > 0.0 {
+            let p = (d0 / d1).log2();
+            levels[i].order = Some(p);
+            if i == n - 2 && p > 0.0 {
+                extrapolated = Some(q2 + (q2 - q1) / (p.exp2() - 1.0));
+            }
+        } else if d1 == 0.0 && i == n - 2 {
+            extrapolated = Some(q2);
+        }
+    }
+    if let Some(q) = extrapolated {
+        for l in &mut levels {
+            l.est_error = Some(((l.qoi - q) / q).abs());
+        }
+    }
+    Study {
+        levels,
+        extrapolated,
+    }
+}
+
+impl Study {
+    /// The coarsest level whose estimated relative error is below `tol`.
+    pub fn pick(&self, tol: f64) -> Option<&Level> {
+        self.levels
+            .iter()
+            .find(|l| l.est_error.is_some_and(|e| e < tol))
+    }
+
+    /// Whitespace-aligned table with a header row.
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "{:<10} {:>8} {:>9} {:>22} {:>12} {:>22} {:>10} {:>7}\n",
+            "mesh", "dofs", "seconds", "qoi", "diff_next", "richardson", "est_error", "order"
+        );
+        let opt = |v: Option<f64>, prec: usize| match v {
+            Some(x) => format!("{x:.prec$e}"),
+            None => "-".into(),
+        };
+        for l in &self.levels {
+            s.push_str(&format!(
+                "{:<10} {:>8} {:>9.3} {:>22.15e} {:>12} {:>22} {:>10} {:>7}\n",
+                format!("{}x{}", l.mesh.0, l.mesh.1),
+                l.dofs,
+                l.seconds,
+                l.qoi,
+                opt(l.diff_to_next, 3),
+                opt(self.extrapolated, 15),
+                opt(l.est_error, 2),
+                l.order
+                    .map(|p| format!("{p:.2}"))
+                    .unwrap_or_else(|| "-".into())
+            ));
+        }
+        s
+    }
+
+    /// CSV with header `mesh,nx,ny,dofs,seconds,qoi,diff_next,richardson,est_error,order`.
+    pub fn csv(&self) -> String {
+        let mut s =
+            String::from("mesh,nx,ny,dofs,seconds,qoi,diff_next,richardson,est_error,order\n");
+        let opt = |v: Option<f64>| v.map(|x| format!("{x:e}")).unwrap_or_default();
+        for l in &self.levels {
+            s.push_str(&format!(
+                "{}x{},{},{},{},{},{:e},{},{},{},{}\n",
+                l.mesh.0,
+                l.mesh.1,
+                l.mesh.0,
+                l.mesh.1,
+                l.dofs,
+                l.seconds,
+                l.qoi,
+                opt(l.diff_to_next),
+                opt(self.extrapolated),
+                opt(l.est_error),
+                opt(l.order)
+            ));
+        }
+        s
+    }
+
+    /// An SVG chart: estimated error against DOFs (left) and against wall time (right), both
+    /// log–log. Errors below 1e-16 (exact on every mesh) are drawn at 1e-16.
+    pub fn svg(&self, title: &str) -> Result<String, String> {
+        use plotters::prelude::*;
+        let pts: Vec<(f64, f64, f64)> = self
+            .levels
+            .iter()
+            .filter_map(|l| {
+                l.est_error
+                    .map(|e| (l.dofs as f64, l.seconds.max(1e-6), e.max(1e-16)))
+            })
+            .collect();
+        if pts.len() < 2 {
+            return Err("need at least two levels with an error estimate to plot".into());
+        }
+        let mut buf = String::new();
+        {
+            let root = SVGBackend::with_string(&mut buf, (960, 420)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| e.to_string())?;
+            let root = root
+                .titled(title, ("sans-serif", 18))
+                .map_err(|e| e.to_string())?;
+            let (left, right) = root.split_horizontally(480);
+            let range = |v: &dyn Fn(&(f64, f64, f64)) -> f64| {
+                let lo = pts.iter().map(v).fold(f64::MAX, f64::min);
+                let hi = pts.iter().map(v).fold(f64::MIN, f64::max);
+                (lo / 2.0)..(hi * 2.0)
+            };
+            let err = range(&|p| p.2);
+            for (area, xs, label) in [
+                (&left, range(&|p| p.0), "degrees of freedom"),
+                (&right, range(&|p| p.1), "wall time (s)"),
+            ] {
+                let mut chart = ChartBuilder::on(area)
+                    .margin(12)
+                    .x_label_area_size(36)
+                    .y_label_area_size(60)
+                    .build_cartesian_2d(xs.log_scale(), err.clone().log_scale())
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .configure_mesh()
+                    .x_desc(label)
+                    .y_desc("estimated relative error")
+                    .draw()
+                    .map_err(|e| e.to_string())?;
+                let series: Vec<(f64, f64)> = pts
+                    .iter()
+                    .map(|p| (if label.starts_with("deg") { p.0 } else { p.1 }, p.2))
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(series.clone(), &BLUE))
+                    .map_err(|e| e.to_string())?;
+                chart
+                    .draw_series(series.iter().map(|&p| Circle::new(p, 4, BLUE.filled())))
+                    .map_err(|e| e.to_string())?;
+            }
+            root.present().map_err(|e| e.to_string())?;
+        }
+        Ok(buf)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recovers_order_and_limit_of_a_known_sequence() {
+        // q(h) = 2 + 3 h² with h = 1/2^k: order 2, limit 2
+        let ladder = default_ladder(1.5, 4);
+        assert_eq!(ladder, vec![(4, 6), (8, 12), (16, 24), (32, 48)]);
+        let s = study(
+            &ladder,
+            |(nx, _)| Ok::<_, ()>((2.0 + 3.0 / (nx as f64 * nx as f64), nx)),
+            |_| {},
+        )
+        .unwrap();
+        assert!((s.extrapolated.unwrap() - 2.0).abs() < 1e-12);
+        for l in &s.levels[1..3] {
+            assert!((l.order.unwrap() - 2.0).abs() < 1e-9);
+        }
+        assert_eq!(s.pick(2e-3).unwrap().mesh, (32, 48));
+        assert!(s.pick(1e-3).is_none());
+        assert_eq!(s.pick(1e-2).unwrap().mesh, (16, 24));
+        assert!(s.table().starts_with("mesh"));
+        assert!(s.csv().starts_with("mesh,nx,ny,dofs,seconds,qoi"));
+        assert!(s.svg("test").unwrap().contains("<svg"));
+        assert_eq!(parse_ladder("4x6, 8X12").unwrap(), vec![(4, 6), (8, 12)]);
+        assert!(parse_ladder("4x0").is_err());
+    }
+}
