@@ -4,6 +4,8 @@
 //! Angles are measured from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
 //! axis is y; its weft direction is (sin θ, cos θ, 0) and its warp (cos θ, −sin θ, 0).
 
+pub mod plate;
+
 use crate::assembly::{ModelError, ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::rectangular_grid;

@@ -1,0 +1,58 @@
+//! Published shell benchmarks (issue: convergence studies). Each assertion cites its reference
+//! value; the larger sweeps are `cargo run --release --example plates`.
+
+use kshell::scene::plate::{SquarePlate, Support};
+
+/// Simply supported square plate under uniform load, centre deflection factor w_c D/(q a⁴):
+/// Navier's double sine series (Timoshenko & Woinowsky-Krieger, Theory of Plates and Shells,
+/// 1959, §30), 16/π⁶ Σ_{m,n odd} (−1)^((m+n)/2−1) / (m n (m² + n²)²) = 0.0040623527 (summed here
+/// to m, n < 2001; the usual quotation is 0.00406235).
+const SIMPLY_SUPPORTED: f64 = 0.004_062_352_7;
+/// Clamped square plate, same factor: 0.001265319 (Taylor & Govindjee, Commun. Numer. Meth.
+/// Engng 20, 757–765, 2004, as quoted in libMesh's miscellaneous example 11).
+const CLAMPED: f64 = 0.001_265_319;
+
+fn factor(support: Support, n: usize) -> f64 {
+    // q small enough (w/t ≈ 4e-5) that membrane stretching does not show at this precision
+    SquarePlate {
+        side: 1.0,
+        thickness: 0.01,
+        young: 1.0e7,
+        poisson: 0.3,
+        n,
+        support,
+    }
+    .run(1e-4)
+    .unwrap()
+    .deflection_factor
+}
+
+#[test]
+fn simply_supported_square_plate() {
+    let (e8, e16) = (
+        (factor(Support::Simple, 8) / SIMPLY_SUPPORTED - 1.0).abs(),
+        (factor(Support::Simple, 16) / SIMPLY_SUPPORTED - 1.0).abs(),
+    );
+    // measured: 4.3e-5 and 2.6e-6 (order 4.0)
+    assert!(e16 < 1e-5, "16 x 16: relative error {e16:.2e}");
+    assert!(
+        (e8 / e16).log2() > 3.0,
+        "order {:.2} ({e8:.2e}, {e16:.2e})",
+        (e8 / e16).log2()
+    );
+}
+
+#[test]
+fn clamped_square_plate() {
+    let (e8, e16) = (
+        (factor(Support::Clamped, 8) / CLAMPED - 1.0).abs(),
+        (factor(Support::Clamped, 16) / CLAMPED - 1.0).abs(),
+    );
+    // measured: 1.4e-4 and 8.4e-6 (order 4.0)
+    assert!(e16 < 2e-5, "16 x 16: relative error {e16:.2e}");
+    assert!(
+        (e8 / e16).log2() > 3.0,
+        "order {:.2} ({e8:.2e}, {e16:.2e})",
+        (e8 / e16).log2()
+    );
+}
