@@ -43,7 +43,8 @@ pub fn default_ladder(aspect: f64, levels: usize) -> Vec<(usize, usize)> {
 pub fn parse_ladder(s: &str) -> Result<Vec<(usize, usize)>, String> {
     s.split(',')
         .map(|m| {
-            let bad = || format!("mesh ladder entries look like 8x12, got '{m}'");
+            let bad =
+                || format!("mesh must look like 8x12 (faces across x faces along), got '{m}'");
             let (a, b) = m.trim().split_once(['x', 'X']).ok_or_else(bad)?;
             let (nx, ny) = (
                 a.trim().parse::<usize>().map_err(|_| bad())?,

@@ -217,6 +217,19 @@ fn bend_prints_one_row() {
     let v: Vec<f64> = lines[1].split(',').map(|x| x.parse().unwrap()).collect();
     assert_eq!(v[0], 40.0);
     assert!(v[1] > 0.0 && v[1] < 90.0, "{out}");
+    // the cantilever's default boundary treatment is the ghost clamp (README: measured)
+    let (_, ghost, _) = ks_fit(&[
+        "bend",
+        "--material",
+        &m,
+        "--angle",
+        "90",
+        "--overhang",
+        "40",
+        "--boundary",
+        "ghost",
+    ]);
+    assert_eq!(out, ghost);
 }
 
 #[test]

@@ -65,21 +65,8 @@ enum Command {
         /// Number of equal elongation steps (rows printed).
         #[arg(long)]
         steps: usize,
-        /// Faces across × along, e.g. 8x12 (default: 8 across, square-ish elements).
-        #[arg(long, value_parser = parse_mesh)]
-        mesh: Option<(usize, usize)>,
-        /// Boundary treatment of the limit surface: phantom or ghost.
-        #[arg(long, default_value = "phantom")]
-        boundary: BoundaryRule,
-        /// Report each solve on stderr.
-        #[arg(short, long)]
-        verbose: bool,
-        /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
-        #[arg(long, default_value = "dd")]
-        precision: Precision,
-        /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
-        #[arg(long)]
-        plain_newton: bool,
+        #[command(flatten)]
+        solve: SceneArgs,
     },
     /// Virtual ASTM D1388 cantilever: prints CSV `overhang_mm,drape_angle_deg`.
     Bend {
@@ -95,21 +82,8 @@ enum Command {
         /// Strip width, mm.
         #[arg(long, default_value_t = 25.0)]
         width: f64,
-        /// Faces across × along, e.g. 4x16 (default: elements of about 6.25 mm).
-        #[arg(long, value_parser = parse_mesh)]
-        mesh: Option<(usize, usize)>,
-        /// Boundary treatment of the limit surface: phantom or ghost.
-        #[arg(long, default_value = "phantom")]
-        boundary: BoundaryRule,
-        /// Report the solve on stderr.
-        #[arg(short, long)]
-        verbose: bool,
-        /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
-        #[arg(long, default_value = "dd")]
-        precision: Precision,
-        /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
-        #[arg(long)]
-        plain_newton: bool,
+        #[command(flatten)]
+        solve: SceneArgs,
     },
     /// Mesh-refinement study of a virtual test: table of QoI, Richardson estimate, observed
     /// order; optionally the coarsest mesh meeting a tolerance, CSV and an SVG chart.
@@ -119,6 +93,41 @@ enum Command {
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+}
+
+/// Options shared by the scene commands.
+#[derive(clap::Args)]
+struct SceneArgs {
+    /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip,
+    /// elements of about 6.25 mm for a cantilever).
+    #[arg(long, value_parser = parse_mesh)]
+    mesh: Option<(usize, usize)>,
+    /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
+    /// ghost for cantilevers, as measured in the README).
+    #[arg(long)]
+    boundary: Option<BoundaryRule>,
+    /// Report each solve on stderr.
+    #[arg(short, long)]
+    verbose: bool,
+    /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
+    #[arg(long, default_value = "dd")]
+    precision: Precision,
+    /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
+    #[arg(long)]
+    plain_newton: bool,
+}
+
+impl SceneArgs {
+    fn solver(&self) -> NewtonOptions {
+        if self.plain_newton {
+            NewtonOptions::plain()
+        } else {
+            NewtonOptions {
+                precision: self.precision,
+                ..NewtonOptions::default()
+            }
+        }
+    }
 }
 
 #[derive(Subcommand)]
@@ -180,17 +189,6 @@ struct StudyArgs {
     boundary: Option<BoundaryRule>,
 }
 
-fn solver_options(precision: Precision, plain: bool) -> NewtonOptions {
-    if plain {
-        NewtonOptions::plain()
-    } else {
-        NewtonOptions {
-            precision,
-            ..NewtonOptions::default()
-        }
-    }
-}
-
 /// One line describing a solve, for --verbose.
 fn describe(r: &kshell::solve::SolveReport) -> String {
     format!(
@@ -212,16 +210,10 @@ fn describe(r: &kshell::solve::SolveReport) -> String {
 
 /// "NXxNY" → (NX, NY), both at least 1.
 fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("mesh must look like 8x12 (faces across x faces along), got '{s}'");
-    let (a, b) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (nx, ny) = (
-        a.trim().parse::<usize>().map_err(|_| bad())?,
-        b.trim().parse::<usize>().map_err(|_| bad())?,
-    );
-    if nx == 0 || ny == 0 {
-        return Err(bad());
+    match kshell::converge::parse_ladder(s)?.as_slice() {
+        [one] => Ok(*one),
+        _ => Err(format!("a mesh looks like 8x12, got '{s}'")),
     }
-    Ok((nx, ny))
 }
 
 /// A positive, finite number of millimetres, in metres.
@@ -258,43 +250,15 @@ fn main() -> ExitCode {
             length,
             to,
             steps,
-            mesh,
-            boundary,
-            verbose,
-            precision,
-            plain_newton,
-        } => cmd_tensile(
-            &material,
-            angle,
-            width,
-            length,
-            to,
-            steps,
-            mesh,
-            boundary,
-            verbose,
-            solver_options(precision, plain_newton),
-        ),
+            solve,
+        } => cmd_tensile(&material, angle, width, length, to, steps, &solve),
         Command::Bend {
             material,
             angle,
             overhang,
             width,
-            mesh,
-            boundary,
-            verbose,
-            precision,
-            plain_newton,
-        } => cmd_bend(
-            &material,
-            angle,
-            overhang,
-            width,
-            mesh,
-            boundary,
-            verbose,
-            solver_options(precision, plain_newton),
-        ),
+            solve,
+        } => cmd_bend(&material, angle, overhang, width, &solve),
         Command::Converge { scene } => cmd_converge(scene),
         Command::Demo => cmd_demo(),
     };
@@ -378,7 +342,6 @@ fn cmd_mesh(
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn cmd_tensile(
     material: &std::path::Path,
     angle: f64,
@@ -386,10 +349,7 @@ fn cmd_tensile(
     length: f64,
     to: f64,
     steps: usize,
-    mesh: Option<(usize, usize)>,
-    boundary: BoundaryRule,
-    verbose: bool,
-    solver: NewtonOptions,
+    args: &SceneArgs,
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
@@ -400,17 +360,19 @@ fn cmd_tensile(
         return Err(format!("--angle must be a number of degrees, got {angle}"));
     }
     let mut strip = TensileStrip::new(w, l, angle);
-    if let Some(m) = mesh {
+    if let Some(m) = args.mesh {
         strip.mesh = m;
     }
-    strip.boundary = boundary;
-    strip.solver = solver;
+    if let Some(b) = args.boundary {
+        strip.boundary = b;
+    }
+    strip.solver = args.solver();
     let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
     let curve = strip.run(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
     for p in &curve {
         println!("{},{}", p.elongation * 1e3, p.force);
-        if verbose {
+        if args.verbose {
             eprintln!(
                 "elongation {:.4} mm: {}",
                 p.elongation * 1e3,
@@ -421,16 +383,12 @@ fn cmd_tensile(
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn cmd_bend(
     material: &std::path::Path,
     angle: f64,
     overhang: f64,
     width: f64,
-    mesh: Option<(usize, usize)>,
-    boundary: BoundaryRule,
-    verbose: bool,
-    solver: NewtonOptions,
+    args: &SceneArgs,
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
@@ -438,16 +396,18 @@ fn cmd_bend(
         return Err(format!("--angle must be a number of degrees, got {angle}"));
     }
     let mut bend = CantileverBend::new(w, l, angle);
-    if let Some(m) = mesh {
+    if let Some(m) = args.mesh {
         if m.1 < 2 {
             return Err("--mesh: a cantilever needs at least 2 faces along".into());
         }
         bend.mesh = m;
     }
-    bend.boundary = boundary;
-    bend.solver = solver;
+    if let Some(b) = args.boundary {
+        bend.boundary = b;
+    }
+    bend.solver = args.solver();
     let r = bend.run(&mat).map_err(|e| e.to_string())?;
-    if verbose {
+    if args.verbose {
         eprintln!(
             "{} load steps, {} iterations in all; last solve: {}",
             r.load_steps,

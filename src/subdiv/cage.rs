@@ -259,9 +259,53 @@ impl<T: Affine> Cage<T> {
     /// The cage made of every face that touches a corner of `face` (given in the vertex order
     /// wanted for it), with `face` as face 0 of the result.
     pub fn one_ring(&self, adj: &CageAdjacency, face_index: usize, face: &[u32]) -> Cage<T> {
-        let mut selected = vec![face_index as u32];
+        let ring = OneRing::gather(
+            face_index as u32,
+            face,
+            |v| &adj.vertex_faces[v as usize],
+            |f| &self.faces[f as usize],
+        );
+        let complete = ring
+            .global
+            .iter()
+            .map(|&v| self.complete[v as usize] && ring.holds_all(&adj.vertex_faces[v as usize]))
+            .collect();
+        Cage {
+            points: ring
+                .global
+                .iter()
+                .map(|&v| self.points[v as usize].clone())
+                .collect(),
+            complete,
+            boundary: ring.local_edges(&self.boundary),
+            faces: ring.faces,
+        }
+    }
+}
+
+/// The faces around a face (every face touching one of its corners, the face itself first),
+/// renumbered locally.
+pub(crate) struct OneRing {
+    /// Selected faces, by index in the source.
+    pub selected: Vec<u32>,
+    /// Source index of each local vertex.
+    pub global: Vec<u32>,
+    local: HashMap<u32, u32>,
+    /// The selected faces in local vertex indices.
+    pub faces: Vec<Vec<u32>>,
+}
+
+impl OneRing {
+    /// Gathers the ring of `face` (its corners in the order wanted for local face 0).
+    pub fn gather<'a>(
+        face_index: u32,
+        face: &[u32],
+        vertex_faces: impl Fn(u32) -> &'a [u32],
+        face_corners: impl Fn(u32) -> &'a [u32],
+    ) -> Self {
+        let mut selected = vec![face_index];
         for &v in face {
-            for &f in &adj.vertex_faces[v as usize] {
+            for &f in vertex_faces(v) {
                 if !selected.contains(&f) {
                     selected.push(f);
                 }
@@ -269,14 +313,11 @@ impl<T: Affine> Cage<T> {
         }
         let mut local: HashMap<u32, u32> = HashMap::new();
         let mut global = Vec::new();
-        let mut faces = Vec::with_capacity(selected.len());
-        for (i, &f) in selected.iter().enumerate() {
-            let src: &[u32] = if i == 0 {
-                face
-            } else {
-                &self.faces[f as usize]
-            };
-            faces.push(
+        let faces = selected
+            .iter()
+            .enumerate()
+            .map(|(i, &f)| {
+                let src = if i == 0 { face } else { face_corners(f) };
                 src.iter()
                     .map(|&v| {
                         *local.entry(v).or_insert_with(|| {
@@ -284,32 +325,28 @@ impl<T: Affine> Cage<T> {
                             global.len() as u32 - 1
                         })
                     })
-                    .collect(),
-            );
-        }
-        let complete = global
-            .iter()
-            .map(|&v| {
-                self.complete[v as usize]
-                    && adj.vertex_faces[v as usize]
-                        .iter()
-                        .all(|f| selected.contains(f))
+                    .collect()
             })
             .collect();
-        let boundary = self
-            .boundary
-            .iter()
-            .filter_map(|&(a, b)| Some(edge_key(*local.get(&a)?, *local.get(&b)?)))
-            .collect();
-        Cage {
-            points: global
-                .iter()
-                .map(|&v| self.points[v as usize].clone())
-                .collect(),
+        Self {
+            selected,
+            global,
+            local,
             faces,
-            complete,
-            boundary,
         }
+    }
+
+    /// Whether every one of `faces` is in the ring.
+    pub fn holds_all(&self, faces: &[u32]) -> bool {
+        faces.iter().all(|f| self.selected.contains(f))
+    }
+
+    /// The edges of `edges` (source indices) between ring vertices, in local indices.
+    pub fn local_edges(&self, edges: &HashSet<(u32, u32)>) -> HashSet<(u32, u32)> {
+        edges
+            .iter()
+            .filter_map(|&(a, b)| Some(edge_key(*self.local.get(&a)?, *self.local.get(&b)?)))
+            .collect()
     }
 }
 

@@ -17,12 +17,12 @@
 //! [0, 1] (the convention of OpenSubdiv and most subdivision libraries).
 
 use super::bspline::bicubic_weights;
-use super::cage::{edge_key, Cage, CageAdjacency};
+use super::cage::{edge_key, Cage, CageAdjacency, OneRing};
 use super::ghost::add_ghost_layer;
 use super::patch::{regular_patch, Neighbourhood, Recipe};
 use crate::mesh::{PolyMesh, Topology, TopologyError};
 use crate::Vec3;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashSet;
 
 /// How the surface is closed off along a free edge.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -352,32 +352,13 @@ impl LimitSurface {
     /// The cage of every face touching a corner of `face` (face 0 of the result), with each point
     /// a unit weight vector, and the global index of each local point.
     fn face_cage(&self, face: usize) -> (Cage<Vec<f64>>, Vec<u32>) {
-        let corners = &self.cage.faces[face];
-        let mut selected = vec![face as u32];
-        for &v in corners {
-            for &f in &self.topology.vertex_faces[v as usize] {
-                if !selected.contains(&f) {
-                    selected.push(f);
-                }
-            }
-        }
-        let mut local: HashMap<u32, u32> = HashMap::new();
-        let mut global = Vec::new();
-        let faces: Vec<Vec<u32>> = selected
-            .iter()
-            .map(|&f| {
-                self.cage.faces[f as usize]
-                    .iter()
-                    .map(|&v| {
-                        *local.entry(v).or_insert_with(|| {
-                            global.push(v);
-                            global.len() as u32 - 1
-                        })
-                    })
-                    .collect()
-            })
-            .collect();
-        let m = global.len();
+        let ring = OneRing::gather(
+            face as u32,
+            &self.cage.faces[face],
+            |v| &self.topology.vertex_faces[v as usize],
+            |f| &self.cage.faces[f as usize],
+        );
+        let m = ring.global.len();
         let points = (0..m)
             .map(|i| {
                 let mut e = vec![0.0; m];
@@ -385,23 +366,17 @@ impl LimitSurface {
                 Some(e)
             })
             .collect();
-        let complete = global
+        let complete = ring
+            .global
             .iter()
-            .map(|&v| {
-                self.topology.vertex_faces[v as usize]
-                    .iter()
-                    .all(|f| selected.contains(f))
-            })
+            .map(|&v| ring.holds_all(&self.topology.vertex_faces[v as usize]))
             .collect();
-        let boundary = self
-            .boundary
-            .iter()
-            .filter_map(|&(a, b)| Some(edge_key(*local.get(&a)?, *local.get(&b)?)))
-            .collect();
+        let boundary = ring.local_edges(&self.boundary);
+        let global = ring.global.clone();
         (
             Cage {
                 points,
-                faces,
+                faces: ring.faces,
                 complete,
                 boundary,
             },
