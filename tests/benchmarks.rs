@@ -56,3 +56,30 @@ fn clamped_square_plate() {
         (e8 / e16).log2()
     );
 }
+
+/// Scordelis–Lo roof, vertical displacement at the free-edge midpoint, Kirchhoff–Love:
+/// 0.3006 (J. Kiendl, PhD thesis, TU München 2011); 0.3005925 in GeoPDEs'
+/// `ex_KL_shell_scordelis_lo_roof.m` (rafavzqz/geopdes). We compare with the latter's digits.
+const SCORDELIS_LO: f64 = 0.300_592_5;
+
+#[test]
+fn scordelis_lo_roof() {
+    use kshell::scene::roof::ScordelisLo;
+    let w: Vec<f64> = [4, 8, 16]
+        .iter()
+        .map(|&n| {
+            ScordelisLo {
+                n_length: n,
+                n_arc: n,
+            }
+            .run()
+            .unwrap()
+            .0
+        })
+        .collect();
+    // measured: 0.27276, 0.29798, 0.30004 (−0.18 %); 0.30055 at 64 x 64 (paper_repro sweep)
+    let err = (w[2] / SCORDELIS_LO - 1.0).abs();
+    assert!(err < 5e-3, "16 x 16: {} ({err:.2e})", w[2]);
+    let order = ((w[1] - w[0]) / (w[2] - w[1])).abs().log2();
+    assert!(order > 2.5, "observed order {order:.2} ({w:?})");
+}

@@ -5,6 +5,7 @@
 //! axis is y; its weft direction is (sin θ, cos θ, 0) and its warp (cos θ, −sin θ, 0).
 
 pub mod plate;
+pub mod roof;
 
 use crate::assembly::{ModelError, ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
