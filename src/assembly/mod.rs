@@ -138,6 +138,8 @@ pub struct ShellModel {
     pub areal_density: f64,
     /// m/s² (default (0, 0, −9.81) when gravity is on, zero otherwise)
     gravity: Vec3,
+    /// Pa, acting along x_u × x_v (a follower load, potential −p V)
+    pressure: f64,
     /// ∂E_gravity/∂x_i (constant)
     gravity_gradient: Vec<Vec3>,
     /// Dead loads on the control points, N
@@ -258,6 +260,7 @@ impl ShellModel {
             thickness,
             areal_density,
             gravity: [0.0; 3],
+            pressure: 0.0,
             thickness_rule,
             pattern,
         };
@@ -298,6 +301,32 @@ impl ShellModel {
         {
             *e = std::array::from_fn(|c| g[c] - f[c]);
         }
+    }
+
+    /// Sets a pressure (Pa) on the side x_u × x_v points to. It follows the surface: its
+    /// potential is −p V with V = ⅓ ∫ x·(x_u × x_v) du dv, the enclosed volume of a closed
+    /// surface.
+    pub fn set_pressure(&mut self, p: f64) {
+        self.pressure = p;
+    }
+
+    pub fn pressure(&self) -> f64 {
+        self.pressure
+    }
+
+    /// ⅓ ∫ x·(x_u × x_v) du dv over the limit surface (the enclosed volume when closed).
+    pub fn volume(&self, x: &[Vec3]) -> f64 {
+        (0..self.basis.num_points())
+            .map(|q| {
+                let p = self.basis.limit_stencil(q).apply(x);
+                let (c, a, b) = (
+                    Vector3::from(p.d[0]),
+                    Vector3::from(p.d[1]),
+                    Vector3::from(p.d[2]),
+                );
+                self.basis.quad_weight[q] * c.dot(&a.cross(&b)) / 3.0
+            })
+            .sum()
     }
 
     pub fn gravity(&self) -> Vec3 {
@@ -488,6 +517,68 @@ impl ShellModel {
         Ok(energy)
     }
 
+    /// The follower pressure's share of Gauss point q: −p w/3 x·(x_u × x_v), its gradient and
+    /// Hessian (the triple product is trilinear: ∂²/∂x∂x_u = −[x_v]×, ∂²/∂x∂x_v = [x_u]×,
+    /// ∂²/∂x_u∂x_v = −[x]×).
+    #[allow(clippy::too_many_arguments)]
+    fn pressure_terms(
+        &self,
+        q: usize,
+        x: &[Vec3],
+        want_g: bool,
+        want_h: bool,
+        local: &[u16],
+        n: usize,
+        acc: &mut Accumulator,
+        s: &mut FaceScratch,
+    ) {
+        let (idx, w) = self.basis.stencil(q);
+        let mut d = [Vector3::zeros(); 3];
+        for (&i, wi) in idx.iter().zip(w) {
+            let p = Vector3::from(x[i as usize]);
+            for k in 0..3 {
+                d[k] += wi[k] * p;
+            }
+        }
+        let [c, a, b] = d;
+        let scale = -self.pressure * self.basis.quad_weight[q] / 3.0;
+        acc.energy += scale * c.dot(&a.cross(&b));
+        if want_g {
+            let parts = [a.cross(&b), b.cross(&c), c.cross(&a)];
+            for (&i, wi) in idx.iter().zip(w) {
+                let g = wi[0] * parts[0] + wi[1] * parts[1] + wi[2] * parts[2];
+                for k in 0..3 {
+                    acc.grad[i as usize][k] += scale * g[k];
+                }
+            }
+        }
+        if want_h {
+            let skew = |v: &Vector3<f64>| {
+                Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+            };
+            let (sc, sa, sb) = (skew(&c), skew(&a), skew(&b));
+            // B[k][l]: ∂²T/∂d_k∂d_l for d = (x, x_u, x_v)
+            let z = Matrix3::zeros();
+            let blocks = [[z, -sb, sa], [sb, z, -sc], [-sa, sc, z]];
+            for ai in 0..idx.len() {
+                let la = local[ai] as usize;
+                for bi in ai..idx.len() {
+                    let mut blk = Matrix3::zeros();
+                    for k in 0..3 {
+                        for l in 0..3 {
+                            let f = w[ai][k] * w[bi][l];
+                            if f != 0.0 && k != l {
+                                blk += f * blocks[k][l];
+                            }
+                        }
+                    }
+                    let lb = local[bi] as usize;
+                    s.local[la * n - la * (la + 1) / 2 + lb] += scale * blk;
+                }
+            }
+        }
+    }
+
     /// Adds one face's energy, gradient and Hessian to `acc`.
     fn face_terms(
         &self,
@@ -523,6 +614,9 @@ impl ShellModel {
             let y = kinematic_vector(&d);
             let (e, gy, hy) = self.point_terms(q, &y, want)?;
             acc.energy += e;
+            if self.pressure != 0.0 {
+                self.pressure_terms(q, x, want_g, want_h, local, n, acc, s);
+            }
             if want_g {
                 for (&i, wi) in idx.iter().zip(w) {
                     for k in 0..5 {
