@@ -6,6 +6,7 @@
 
 pub mod plate;
 pub mod roof;
+pub mod sphere;
 
 use crate::assembly::{ModelError, ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
