@@ -32,6 +32,32 @@ pub enum SceneError {
     Solve { stage: String, source: SolveError },
 }
 
+/// The free-DOF system of a scene, its set-up failure reported as a scene error.
+fn free_system(
+    model: &ShellModel,
+    fixed: &[bool],
+    slaves: Vec<Slave>,
+) -> Result<FreeSystem, SceneError> {
+    FreeSystem::with_slaves(model, fixed, slaves).map_err(|source| SceneError::Solve {
+        stage: "set-up".into(),
+        source,
+    })
+}
+
+/// One equilibrium solve, its failure reported with `stage`.
+fn equilibrium(
+    model: &ShellModel,
+    system: &FreeSystem,
+    x: &mut [Vec3],
+    opts: &NewtonOptions,
+    stage: impl FnOnce() -> String,
+) -> Result<SolveReport, SceneError> {
+    newton(model, system, x, opts).map_err(|source| SceneError::Solve {
+        stage: stage(),
+        source,
+    })
+}
+
 /// Warp direction of a strip cut at `angle_deg` from the weft, axis along y.
 pub fn warp_direction(angle_deg: f64) -> Vec3 {
     let t = angle_deg.to_radians();
@@ -276,12 +302,7 @@ impl TensileStrip {
         let rate: Vec<f64> = std::iter::repeat_n(0.0, bottom.slaves.len())
             .chain(top.offset_rate.iter().copied())
             .collect();
-        let mut system = FreeSystem::with_slaves(&model, &fixed, slaves).map_err(|source| {
-            SceneError::Solve {
-                stage: "set-up".into(),
-                source,
-            }
-        })?;
+        let mut system = free_system(&model, &fixed, slaves)?;
         let rest = model.basis.control_points.clone();
         let mut x = rest.clone();
         let mut grad = vec![[0.0; 3]; nn];
@@ -307,11 +328,8 @@ impl TensileStrip {
             }
             let offsets: Vec<f64> = base.iter().zip(&rate).map(|(b, r)| b + r * dl).collect();
             system.set_offsets(&offsets);
-            let report = newton(&model, &system, &mut x, &self.solver).map_err(|source| {
-                SceneError::Solve {
-                    stage: format!("elongation {:.4} mm", dl * 1e3),
-                    source,
-                }
+            let report = equilibrium(&model, &system, &mut x, &self.solver, || {
+                format!("elongation {:.4} mm", dl * 1e3)
             })?;
             model
                 .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
@@ -421,12 +439,7 @@ impl CantileverBend {
         for &d in &clamp.fixed {
             fixed[d] = true;
         }
-        let system = FreeSystem::with_slaves(&model, &fixed, clamp.slaves).map_err(|source| {
-            SceneError::Solve {
-                stage: "set-up".into(),
-                source,
-            }
-        })?;
+        let system = free_system(&model, &fixed, clamp.slaves)?;
         let mut x = model.basis.control_points.clone();
         let tip_faces: Vec<usize> = ((ny - 1) * nx..ny * nx).collect();
         let per_length = self.tip_force.map(|f| f / self.width);
@@ -445,11 +458,8 @@ impl CantileverBend {
             )?
         } else {
             apply(&mut model, 1.0);
-            let last = newton(&model, &system, &mut x, &self.solver).map_err(|source| {
-                SceneError::Solve {
-                    stage: "full load in one step".into(),
-                    source,
-                }
+            let last = equilibrium(&model, &system, &mut x, &self.solver, || {
+                "full load in one step".into()
             })?;
             ContinuationReport {
                 steps: 1,

@@ -12,9 +12,9 @@
 //!   curvature free), applied as a tensor product at the corners: z_ij = f(i) f(j) z_m(i)m(j)
 //!   with m(−1) = m(0) = 1, f(−1) = 1, f(0) = −½, and mirrored at the far edges.
 
-use super::{build_model, SceneError};
+use super::{build_model, equilibrium, free_system, SceneError};
 use crate::material::{FabricMaterial, OrthotropicStvk};
-use crate::solve::{newton, FreeSystem, NewtonOptions, Slave};
+use crate::solve::{NewtonOptions, Slave};
 use crate::subdiv::BoundaryRule;
 
 /// How the plate's edges are held.
@@ -116,18 +116,10 @@ impl SquarePlate {
                 }
             }
         }
-        let system = FreeSystem::with_slaves(&model, &fixed, slaves).map_err(|source| {
-            SceneError::Solve {
-                stage: "set-up".into(),
-                source,
-            }
-        })?;
+        let system = free_system(&model, &fixed, slaves)?;
         let mut x = x0.clone();
-        newton(&model, &system, &mut x, &NewtonOptions::default()).map_err(|source| {
-            SceneError::Solve {
-                stage: "plate".into(),
-                source,
-            }
+        equilibrium(&model, &system, &mut x, &NewtonOptions::default(), || {
+            "plate".into()
         })?;
         // centre of the limit surface: a corner of the four middle faces (n even) or the middle
         // of the middle face (n odd)

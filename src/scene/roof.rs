@@ -11,11 +11,11 @@
 //! rotate); the column on the mid-span symmetry plane holds x (removing the rigid slide). The
 //! reference is linear, so the load is scaled by 1e-4 and the response scaled back.
 
-use super::SceneError;
+use super::{equilibrium, free_system, SceneError};
 use crate::assembly::ShellModel;
 use crate::material::OrthotropicStvk;
 use crate::mesh::rectangular_grid;
-use crate::solve::{newton, FreeSystem, NewtonOptions, Slave};
+use crate::solve::{NewtonOptions, Slave};
 use crate::subdiv::{BasisOptions, BoundaryRule, LimitBasis};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -90,18 +90,10 @@ impl ScordelisLo {
             }
             fixed[3 * node(ni / 2, j)?] = true;
         }
-        let system = FreeSystem::with_slaves(&model, &fixed, slaves).map_err(|source| {
-            SceneError::Solve {
-                stage: "set-up".into(),
-                source,
-            }
-        })?;
+        let system = free_system(&model, &fixed, slaves)?;
         let mut x = x0.clone();
-        newton(&model, &system, &mut x, &NewtonOptions::default()).map_err(|source| {
-            SceneError::Solve {
-                stage: "roof".into(),
-                source,
-            }
+        equilibrium(&model, &system, &mut x, &NewtonOptions::default(), || {
+            "roof".into()
         })?;
         // midpoint of the free edge θ = +40°: face (nx/2, nt − 1) at (u, v) = (0, 1)
         let face = (nt - 1) * nx + nx / 2;

@@ -12,11 +12,11 @@
 //! motions without disturbing the symmetric inflation. The measured stretch is
 //! λ = (V / V₀)^(1/3) from the enclosed volumes.
 
-use super::SceneError;
+use super::{free_system, SceneError};
 use crate::assembly::ShellModel;
 use crate::material::OrthotropicStvk;
 use crate::mesh::{shapes, Topology};
-use crate::solve::{continuation, FreeSystem, NewtonOptions};
+use crate::solve::{continuation, NewtonOptions};
 use crate::subdiv::{refine_uniform, BasisOptions, BoundaryRule, LimitBasis};
 use std::sync::Arc;
 
@@ -77,10 +77,7 @@ impl Balloon {
         if fixed.iter().filter(|f| **f).count() != 12 {
             return Err(SceneError::Input("internal: expected six poles".into()));
         }
-        let system = FreeSystem::new(&model, &fixed).map_err(|source| SceneError::Solve {
-            stage: "set-up".into(),
-            source,
-        })?;
+        let system = free_system(&model, &fixed, Vec::new())?;
         let v0 = model.volume(&x0);
         let mut x = x0.clone();
         continuation(
