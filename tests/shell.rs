@@ -352,3 +352,105 @@ fn parameter_and_thickness_sensitivities_match_differences() {
     }
     model.set_thickness(tau).unwrap();
 }
+
+#[test]
+fn edge_moment_gradient_and_hessian_match_differences() {
+    let mut mesh = rectangular_grid(0.04, 0.06, 3, 4);
+    for p in &mut mesh.positions {
+        p[2] = 4.0 * p[0] * p[0] - 3.0 * p[0] * p[1];
+    }
+    let mut model = model_for(&mesh, BoundaryRule::Ghost, 5e-4);
+    model.set_gravity([0.0; 3]);
+    model.set_pressure(0.0);
+    model.set_edge_moment(&[9, 10, 11], 1.0, 7.0);
+    let mut rng = Rng(23);
+    let x = perturbed(&model.basis.control_points, &mut rng, 2e-3);
+    let n = x.len();
+    let mut g = vec![[0.0; 3]; n];
+    let mut h = BlockMatrix::zeros(model.pattern.clone());
+    model
+        .assemble(&x, Want::Hessian, Some(&mut g), Some(&mut h))
+        .unwrap();
+    // the moment's share alone: remove the elastic part
+    let mut ge = vec![[0.0; 3]; n];
+    let mut he = BlockMatrix::zeros(model.pattern.clone());
+    let mut elastic = model_for(&mesh, BoundaryRule::Ghost, 5e-4);
+    elastic.set_gravity([0.0; 3]);
+    elastic.set_pressure(0.0);
+    elastic
+        .assemble(&x, Want::Hessian, Some(&mut ge), Some(&mut he))
+        .unwrap();
+    let gm: Vec<[f64; 3]> = g
+        .iter()
+        .zip(&ge)
+        .map(|(a, b)| std::array::from_fn(|c| a[c] - b[c]))
+        .collect();
+    let gscale = gm.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(gscale > 0.0);
+    let step = 1e-7;
+    let mut gp = vec![[0.0; 3]; n];
+    let mut gq = vec![[0.0; 3]; n];
+    let mut col = vec![[0.0; 3]; n];
+    let mut cole = vec![[0.0; 3]; n];
+    // the moment Hessian's largest entry, to scale the comparison of every column
+    let mut hmax = 0.0f64;
+    for i in 0..n {
+        for c in 0..3 {
+            let mut e = vec![[0.0; 3]; n];
+            e[i][c] = 1.0;
+            h.mul(&e, &mut col);
+            he.mul(&e, &mut cole);
+            for j in 0..n {
+                for d in 0..3 {
+                    hmax = hmax.max((col[j][d] - cole[j][d]).abs());
+                }
+            }
+        }
+    }
+    assert!(hmax > 0.0);
+    for i in 0..n {
+        for c in 0..3 {
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[i][c] += step;
+            xm[i][c] -= step;
+            let fd = (model.energy(&xp).unwrap()
+                - elastic.energy(&xp).unwrap()
+                - model.energy(&xm).unwrap()
+                + elastic.energy(&xm).unwrap())
+                / (2.0 * step);
+            assert!(
+                (fd - gm[i][c]).abs() <= 1e-6 * gscale,
+                "gradient ({i},{c}): {fd} vs {}",
+                gm[i][c]
+            );
+            model
+                .assemble(&xp, Want::Gradient, Some(&mut gp), None)
+                .unwrap();
+            model
+                .assemble(&xm, Want::Gradient, Some(&mut gq), None)
+                .unwrap();
+            let mut e = vec![[0.0; 3]; n];
+            e[i][c] = 1.0;
+            h.mul(&e, &mut col);
+            he.mul(&e, &mut cole);
+            let mut ep = vec![[0.0; 3]; n];
+            let mut em = vec![[0.0; 3]; n];
+            elastic
+                .assemble(&xp, Want::Gradient, Some(&mut ep), None)
+                .unwrap();
+            elastic
+                .assemble(&xm, Want::Gradient, Some(&mut em), None)
+                .unwrap();
+            for j in 0..n {
+                for d in 0..3 {
+                    let fd = ((gp[j][d] - ep[j][d]) - (gq[j][d] - em[j][d])) / (2.0 * step);
+                    let exact = col[j][d] - cole[j][d];
+                    assert!(
+                        (fd - exact).abs() <= 1e-6 * hmax,
+                        "Hessian ({j},{d})x({i},{c}): {fd} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -140,6 +140,9 @@ pub struct ShellModel {
     gravity: Vec3,
     /// Pa, acting along x_u × x_v (a follower load, potential −p V)
     pressure: f64,
+    /// End moment about the x axis: (stencil of an edge point, weight × rest length element)
+    /// and the moment per unit length; potential −m ∫ θ ds with θ = atan2(x_v,z, x_v,y)
+    edge_moment: Option<(Vec<(crate::subdiv::LimitStencil, f64)>, f64)>,
     /// ∂E_gravity/∂x_i (constant)
     gravity_gradient: Vec<Vec3>,
     /// Dead loads on the control points, N
@@ -261,6 +264,7 @@ impl ShellModel {
             areal_density,
             gravity: [0.0; 3],
             pressure: 0.0,
+            edge_moment: None,
             thickness_rule,
             pattern,
         };
@@ -312,6 +316,92 @@ impl ShellModel {
 
     pub fn pressure(&self) -> f64 {
         self.pressure
+    }
+
+    /// Puts a moment `per_length` (N·m/m) about the x axis on the limit curve v = `v` of
+    /// `faces`, conjugate to the angle θ = atan2(x_v·e_z, x_v·e_y) of the tangent across that
+    /// edge: its potential is −m ∫ θ ds, so it follows the rotation (a pure end moment rolls a
+    /// strip into a circle). θ is single-valued for rotations below ±180°.
+    pub fn set_edge_moment(&mut self, faces: &[usize], v: f64, per_length: f64) {
+        let surface = self.basis.surface();
+        let rule = GaussLegendre::new(4)
+            .expect("4 is a valid rule")
+            .on_interval(0.0, 1.0);
+        let x = &self.basis.control_points;
+        let mut points = Vec::new();
+        for &face in faces {
+            let uvs: Vec<[f64; 2]> = rule.iter().map(|&(u, _)| [u, v]).collect();
+            let Ok(stencils) = surface.stencils(face, &uvs) else {
+                continue;
+            };
+            for (s, &(_, w)) in stencils.into_iter().zip(&rule) {
+                let t = s.apply(x).d[1];
+                let ds = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+                points.push((s, w * ds));
+            }
+        }
+        self.edge_moment = Some((points, per_length));
+    }
+
+    /// Scales the edge moment set by [`ShellModel::set_edge_moment`].
+    pub fn scale_edge_moment(&mut self, per_length: f64) {
+        if let Some((_, m)) = &mut self.edge_moment {
+            *m = per_length;
+        }
+    }
+
+    /// The edge moment's potential and, as asked, gradient and Hessian.
+    fn edge_moment_terms(
+        &self,
+        x: &[Vec3],
+        grad: Option<&mut [Vec3]>,
+        hess: Option<&mut BlockMatrix>,
+    ) -> f64 {
+        let Some((points, m)) = &self.edge_moment else {
+            return 0.0;
+        };
+        let mut grad = grad;
+        let mut hess = hess;
+        let mut energy = 0.0;
+        for (s, wds) in points {
+            let t = s.apply(x).d[2];
+            let (ty, tz) = (t[1], t[2]);
+            let r2 = ty * ty + tz * tz;
+            let theta = tz.atan2(ty);
+            let c = -m * wds;
+            energy += c * theta;
+            // ∂θ/∂t = (0, −t_z, t_y)/ρ²; ∂²θ/∂t² in (y, z): [[2 t_y t_z, t_z² − t_y²], [., −2 t_y t_z]]/ρ⁴
+            let dt = [0.0, -tz / r2, ty / r2];
+            let r4 = r2 * r2;
+            let h = Matrix3::new(
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                2.0 * ty * tz / r4,
+                (tz * tz - ty * ty) / r4,
+                0.0,
+                (tz * tz - ty * ty) / r4,
+                -2.0 * ty * tz / r4,
+            );
+            if let Some(g) = grad.as_deref_mut() {
+                for (&i, w) in s.indices.iter().zip(&s.weights) {
+                    for k in 0..3 {
+                        g[i as usize][k] += c * w[2] * dt[k];
+                    }
+                }
+            }
+            if let Some(hm) = hess.as_deref_mut() {
+                for (a, (&i, wi)) in s.indices.iter().zip(&s.weights).enumerate() {
+                    for (&j, wj) in s.indices[a..].iter().zip(&s.weights[a..]) {
+                        if let Some(k) = hm.pattern.find(i, j) {
+                            hm.blocks[k] += (c * wi[2] * wj[2]) * h;
+                        }
+                    }
+                }
+            }
+        }
+        energy
     }
 
     /// ⅓ ∫ x·(x_u × x_v) du dv over the limit surface (the enclosed volume when closed).
@@ -498,6 +588,11 @@ impl ShellModel {
         if let Some(h) = hess.as_deref_mut() {
             h.fill_zero();
         }
+        energy += self.edge_moment_terms(
+            x,
+            if want_g { grad.as_deref_mut() } else { None },
+            if want_h { hess.as_deref_mut() } else { None },
+        );
         for part in parts {
             let part = part?;
             energy += part.energy;

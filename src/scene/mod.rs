@@ -371,6 +371,9 @@ pub struct CantileverBend {
     pub gravity: bool,
     /// Total dead force on the free edge, spread uniformly along it, N (zero for ASTM D1388).
     pub tip_force: Vec3,
+    /// Total end moment about the x axis, N·m, following the rotation of the free edge
+    /// (positive rolls the strip up towards +z; single-valued below half a turn).
+    pub tip_moment: f64,
     pub solver: NewtonOptions,
     /// Raise the load gradually (default); otherwise apply it all in one solve.
     pub continuation: bool,
@@ -402,6 +405,7 @@ impl CantileverBend {
             boundary: BoundaryRule::Ghost,
             gravity: true,
             tip_force: [0.0; 3],
+            tip_moment: 0.0,
             solver: NewtonOptions::default(),
             continuation: true,
         }
@@ -445,9 +449,14 @@ impl CantileverBend {
         let per_length = self.tip_force.map(|f| f / self.width);
         let tip_load = model.edge_load(&tip_faces, 1.0, per_length);
         let g = if self.gravity { STANDARD_GRAVITY } else { 0.0 };
+        let moment = self.tip_moment / self.width;
+        if moment != 0.0 {
+            model.set_edge_moment(&tip_faces, 1.0, 0.0);
+        }
         let apply = |m: &mut ShellModel, t: f64| {
             m.set_gravity([0.0, 0.0, -g * t]);
             m.set_dead_load(tip_load.iter().map(|f| f.map(|c| c * t)).collect());
+            m.scale_edge_moment(moment * t);
         };
         let cont = if self.continuation {
             continuation(&mut model, &system, &mut x, &self.solver, apply).map_err(
