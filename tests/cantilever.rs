@@ -87,7 +87,8 @@ fn end_moment_rolls_the_strip_into_an_arc() {
     // Sze, Liu & Lo (2004) test 3.2: E = 1.2e6, ν = 0, L = 12, b = 1, h = 0.1; a pure end moment
     // M bends the strip into a circular arc of angle θ = M L / EI (a full circle at
     // M_max = 2π EI / L = 50π/3). Exact tip: −u = L (1 − sin θ / θ), w = L (1 − cos θ) / θ.
-    // Our follower moment is single-valued below half a turn, so we go to θ = 0.45 · 2π.
+    // Up to 0.9 of the full circle (324°): beyond 0.94 our Newton stalls at a relative
+    // residual of 6e-7 (not yet understood), so the closed circle itself is not tested.
     let m = FabricMaterial {
         name: "sze32".into(),
         areal_density: 1.0,
@@ -96,7 +97,7 @@ fn end_moment_rolls_the_strip_into_an_arc() {
     };
     let (l, ei) = (12.0, 1.2e6 * 0.1f64.powi(3) / 12.0);
     let m_max = 2.0 * std::f64::consts::PI * ei / l;
-    for frac in [0.2, 0.45] {
+    for frac in [0.2, 0.45, 0.75, 0.9] {
         let mut bend = CantileverBend::new(1.0, l, 90.0);
         bend.mesh = (2, 32);
         bend.gravity = false;
@@ -109,7 +110,8 @@ fn end_moment_rolls_the_strip_into_an_arc() {
             l * (1.0 - theta.cos()) / theta,
         );
         eprintln!("M/Mmax {frac}: -u {u} (exact {ue}), w {w} (exact {we})");
-        // measured on 2 x 32: tip error 1.8e-5 L at 0.2, 1.2e-4 L at 0.45
+        // measured on 2 x 32: tip error 1.8e-5 L at 0.2, 1.2e-4 L at 0.45, 3.3e-4 L at 0.75,
+        // 4.3e-4 L at 0.9
         let err = ((u - ue).powi(2) + (w - we).powi(2)).sqrt() / l;
         assert!(
             err < 5e-3,

@@ -140,9 +140,10 @@ pub struct ShellModel {
     gravity: Vec3,
     /// Pa, acting along x_u × x_v (a follower load, potential −p V)
     pressure: f64,
-    /// End moment about the x axis: (stencil of an edge point, weight × rest length element)
-    /// and the moment per unit length; potential −m ∫ θ ds with θ = atan2(x_v,z, x_v,y)
-    edge_moment: Option<(Vec<(crate::subdiv::LimitStencil, f64)>, f64)>,
+    /// End moment about the x axis: (stencil of an edge point, weight × rest length element,
+    /// reference angle) and the moment per unit length; potential −m ∫ θ ds with
+    /// θ = atan2(x_v,z, x_v,y) unwrapped about the reference
+    edge_moment: Option<(Vec<(crate::subdiv::LimitStencil, f64, f64)>, f64)>,
     /// ∂E_gravity/∂x_i (constant)
     gravity_gradient: Vec<Vec3>,
     /// Dead loads on the control points, N
@@ -158,6 +159,12 @@ pub struct ShellModel {
     face_blocks: Vec<Vec<u32>>,
     /// Position of every stencil entry in its face's node list (aligned with the stencil table).
     local_index: Vec<u16>,
+}
+
+/// The angle equal to `a` modulo 2π nearest to `reference`.
+fn unwrap(a: f64, reference: f64) -> f64 {
+    let tau = std::f64::consts::TAU;
+    a + tau * ((reference - a) / tau).round()
 }
 
 /// Parameter sensitivities of the energy and of its gradient.
@@ -337,10 +344,22 @@ impl ShellModel {
             for (s, &(_, w)) in stencils.into_iter().zip(&rule) {
                 let t = s.apply(x).d[1];
                 let ds = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
-                points.push((s, w * ds));
+                let tv = s.apply(x).d[2];
+                let theta = tv[2].atan2(tv[1]);
+                points.push((s, w * ds, theta));
             }
         }
         self.edge_moment = Some((points, per_length));
+    }
+
+    /// Moves each edge point's reference angle to its (unwrapped) angle at `x`.
+    pub fn update_edge_angles(&mut self, x: &[Vec3]) {
+        if let Some((points, _)) = &mut self.edge_moment {
+            for (s, _, reference) in points.iter_mut() {
+                let t = s.apply(x).d[2];
+                *reference = unwrap(t[2].atan2(t[1]), *reference);
+            }
+        }
     }
 
     /// Scales the edge moment set by [`ShellModel::set_edge_moment`].
@@ -363,11 +382,11 @@ impl ShellModel {
         let mut grad = grad;
         let mut hess = hess;
         let mut energy = 0.0;
-        for (s, wds) in points {
+        for (s, wds, reference) in points {
             let t = s.apply(x).d[2];
             let (ty, tz) = (t[1], t[2]);
             let r2 = ty * ty + tz * tz;
-            let theta = tz.atan2(ty);
+            let theta = unwrap(tz.atan2(ty), *reference);
             let c = -m * wds;
             energy += c * theta;
             // ∂θ/∂t = (0, −t_z, t_y)/ρ²; ∂²θ/∂t² in (y, z): [[2 t_y t_z, t_z² − t_y²], [., −2 t_y t_z]]/ρ⁴

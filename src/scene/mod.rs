@@ -453,20 +453,25 @@ impl CantileverBend {
         if moment != 0.0 {
             model.set_edge_moment(&tip_faces, 1.0, 0.0);
         }
-        let apply = |m: &mut ShellModel, t: f64| {
+        let apply = |m: &mut ShellModel, t: f64, x: &[Vec3]| {
             m.set_gravity([0.0, 0.0, -g * t]);
             m.set_dead_load(tip_load.iter().map(|f| f.map(|c| c * t)).collect());
+            m.update_edge_angles(x);
             m.scale_edge_moment(moment * t);
         };
+        // an end moment turns the edge by up to a full circle: steps of at most 1/8 keep each
+        // solve's rotation well below the half turn the angle is unwrapped over
+        let max_step = if moment != 0.0 { 0.125 } else { 1.0 };
         let cont = if self.continuation {
-            continuation(&mut model, &system, &mut x, &self.solver, apply).map_err(
+            continuation(&mut model, &system, &mut x, &self.solver, max_step, apply).map_err(
                 |(t, source)| SceneError::Solve {
                     stage: format!("load factor {t:.4}"),
                     source,
                 },
             )?
         } else {
-            apply(&mut model, 1.0);
+            let start = x.clone();
+            apply(&mut model, 1.0, &start);
             let last = equilibrium(&model, &system, &mut x, &self.solver, || {
                 "full load in one step".into()
             })?;

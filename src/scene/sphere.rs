@@ -85,7 +85,8 @@ impl Balloon {
             &system,
             &mut x,
             &NewtonOptions::default(),
-            |m, t| m.set_pressure(p * t),
+            1.0,
+            |m, t, _| m.set_pressure(p * t),
         )
         .map_err(|(t, source)| SceneError::Solve {
             stage: format!("pressure factor {t:.4}"),

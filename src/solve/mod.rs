@@ -671,9 +671,10 @@ pub struct ContinuationReport {
     pub last: SolveReport,
 }
 
-/// Raises a load factor t from 0 to 1, `apply(model, t)` setting the load, solving for
-/// equilibrium at each step. The first increment is 1/8; it doubles after an easy solve (≤ 12
-/// Newton iterations) and halves after a failed one. Each solve starts from the secant
+/// Raises a load factor t from 0 to 1, `apply(model, t, x)` setting the load (x: the last
+/// equilibrium), solving for equilibrium at each step. The first increment is min(1/8,
+/// `max_step`); it doubles after an easy solve (≤ 12 Newton iterations), up to `max_step`, and
+/// halves after a failed one. Each solve starts from the secant
 /// prediction through the last two equilibria. On failure returns the load factor reached for
 /// and the error.
 pub fn continuation(
@@ -681,18 +682,19 @@ pub fn continuation(
     system: &FreeSystem,
     x: &mut Vec<Vec3>,
     solver: &NewtonOptions,
-    mut apply: impl FnMut(&mut ShellModel, f64),
+    max_step: f64,
+    mut apply: impl FnMut(&mut ShellModel, f64, &[Vec3]),
 ) -> Result<ContinuationReport, (f64, SolveError)> {
     let opts = NewtonOptions {
         max_iterations: solver.max_iterations.min(30),
         ..*solver
     };
-    let (mut factor, mut step) = (0.0f64, 0.125f64);
+    let (mut factor, mut step) = (0.0f64, 0.125f64.min(max_step));
     let mut report = ContinuationReport::default();
     let mut previous: Option<(f64, Vec<Vec3>)> = None;
     while factor < 1.0 {
         let target = (factor + step).min(1.0);
-        apply(model, target);
+        apply(model, target, x);
         let mut trial = x.clone();
         if let Some((f0, x0)) = &previous {
             let r = (target - factor) / (factor - f0);
@@ -709,7 +711,7 @@ pub fn continuation(
                 report.steps += 1;
                 report.iterations += r.iterations;
                 if r.iterations <= 12 {
-                    step *= 2.0;
+                    step = (2.0 * step).min(max_step);
                 }
                 report.last = r;
             }
@@ -717,7 +719,7 @@ pub fn continuation(
                 report.iterations += opts.max_iterations;
                 step *= 0.5;
                 if step < 1e-4 {
-                    apply(model, factor);
+                    apply(model, factor, x);
                     return Err((target, e));
                 }
             }
