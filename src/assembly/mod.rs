@@ -143,7 +143,7 @@ pub struct ShellModel {
     /// End moment about the x axis: (stencil of an edge point, weight × rest length element,
     /// reference angle) and the moment per unit length; potential −m ∫ θ ds with
     /// θ = atan2(x_v,z, x_v,y) unwrapped about the reference
-    edge_moment: Option<(Vec<(crate::subdiv::LimitStencil, f64, f64)>, f64)>,
+    edge_moment: Option<EdgeMoment>,
     /// ∂E_gravity/∂x_i (constant)
     gravity_gradient: Vec<Vec3>,
     /// Dead loads on the control points, N
@@ -159,6 +159,14 @@ pub struct ShellModel {
     face_blocks: Vec<Vec<u32>>,
     /// Position of every stencil entry in its face's node list (aligned with the stencil table).
     local_index: Vec<u16>,
+}
+
+/// Edge points of an end moment (stencil, weight × rest length element, reference angle) and
+/// the moment per unit length.
+#[derive(Clone, Debug)]
+struct EdgeMoment {
+    points: Vec<(crate::subdiv::LimitStencil, f64, f64)>,
+    per_length: f64,
 }
 
 /// The angle equal to `a` modulo 2π nearest to `reference`.
@@ -349,13 +357,13 @@ impl ShellModel {
                 points.push((s, w * ds, theta));
             }
         }
-        self.edge_moment = Some((points, per_length));
+        self.edge_moment = Some(EdgeMoment { points, per_length });
     }
 
     /// Moves each edge point's reference angle to its (unwrapped) angle at `x`.
     pub fn update_edge_angles(&mut self, x: &[Vec3]) {
-        if let Some((points, _)) = &mut self.edge_moment {
-            for (s, _, reference) in points.iter_mut() {
+        if let Some(em) = &mut self.edge_moment {
+            for (s, _, reference) in em.points.iter_mut() {
                 let t = s.apply(x).d[2];
                 *reference = unwrap(t[2].atan2(t[1]), *reference);
             }
@@ -364,8 +372,8 @@ impl ShellModel {
 
     /// Scales the edge moment set by [`ShellModel::set_edge_moment`].
     pub fn scale_edge_moment(&mut self, per_length: f64) {
-        if let Some((_, m)) = &mut self.edge_moment {
-            *m = per_length;
+        if let Some(em) = &mut self.edge_moment {
+            em.per_length = per_length;
         }
     }
 
@@ -376,7 +384,11 @@ impl ShellModel {
         grad: Option<&mut [Vec3]>,
         hess: Option<&mut BlockMatrix>,
     ) -> f64 {
-        let Some((points, m)) = &self.edge_moment else {
+        let Some(EdgeMoment {
+            points,
+            per_length: m,
+        }) = &self.edge_moment
+        else {
             return 0.0;
         };
         let mut grad = grad;
