@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates every convergence table and chart of paper_repro/convergence from the repository
-# root: the accuracy-against-time chart, the plate, roof, balloon and heavy-cantilever sweeps,
+# root: the accuracy-against-time chart, the plate, roof, balloon, heavy-cantilever and Sze cantilever sweeps,
 # and ks-fit converge studies of the example material (tables, CSV, SVG).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -11,6 +11,7 @@ cargo run --release --example plates > "$out/plates.txt"
 cargo run --release --example roof > "$out/roof.txt"
 cargo run --release --example balloon > "$out/balloon.txt"
 cargo run --release --example heavy_cantilever > "$out/heavy_cantilever.txt"
+cargo run --release --example sze_cantilevers > "$out/sze_cantilevers.txt"
 m=examples/materials/cotton.toml
 for angle in 90 45; do
   target/release/ks-fit converge tensile --material $m --angle $angle --width 50 --length 75 \

@@ -372,8 +372,15 @@ pub struct CantileverBend {
     /// Total dead force on the free edge, spread uniformly along it, N (zero for ASTM D1388).
     pub tip_force: Vec3,
     /// Total end moment about the x axis, N·m, following the rotation of the free edge
-    /// (positive rolls the strip up towards +z; single-valued below half a turn).
+    /// (positive rolls the strip up towards +z; the edge angle is unwrapped between load steps,
+    /// so the moment may turn it through more than half a turn).
     pub tip_moment: f64,
+    /// Hold every control point's x coordinate (across the width): bending in the y–z plane
+    /// only, as beam benchmarks assume. Off by default. Needed for an end moment beyond about
+    /// 0.93 of the full circle: there the planar equilibrium under the fixed-axis moment is a
+    /// saddle of the full 3-D problem (an out-of-plane twisting mode; measured on the Sze 3.2
+    /// strip, 2 × 32), so an unconstrained solve leaves the plane.
+    pub in_plane: bool,
     pub solver: NewtonOptions,
     /// Raise the load gradually (default); otherwise apply it all in one solve.
     pub continuation: bool,
@@ -390,6 +397,9 @@ pub struct BendResult {
     /// Newton iterations over all load steps (failed attempts included).
     pub iterations: usize,
     pub report: SolveReport,
+    /// For an in-plane solve ([`CantileverBend::in_plane`]): whether the end state is also
+    /// stable once the x coordinates are let go (false: a saddle of the 3-D problem).
+    pub stable_out_of_plane: Option<bool>,
 }
 
 impl CantileverBend {
@@ -406,6 +416,7 @@ impl CantileverBend {
             gravity: true,
             tip_force: [0.0; 3],
             tip_moment: 0.0,
+            in_plane: false,
             solver: NewtonOptions::default(),
             continuation: true,
         }
@@ -443,7 +454,16 @@ impl CantileverBend {
         for &d in &clamp.fixed {
             fixed[d] = true;
         }
-        let system = free_system(&model, &fixed, clamp.slaves)?;
+        let clamp_slaves = clamp.slaves.clone();
+        let mut slaves = clamp.slaves;
+        if self.in_plane {
+            for n in 0..nn {
+                fixed[3 * n] = true;
+            }
+            // a ghost point's x is an affine function of held x coordinates: hold it as well
+            slaves.retain(|s| s.dof % 3 != 0);
+        }
+        let system = free_system(&model, &fixed, slaves)?;
         let mut x = model.basis.control_points.clone();
         let tip_faces: Vec<usize> = ((ny - 1) * nx..ny * nx).collect();
         let per_length = self.tip_force.map(|f| f / self.width);
@@ -481,6 +501,21 @@ impl CantileverBend {
                 last,
             }
         };
+        let stable_out_of_plane = if self.in_plane {
+            let mut fixed = vec![false; 3 * nn];
+            for &d in &clamp.fixed {
+                fixed[d] = true;
+            }
+            let full = free_system(&model, &fixed, clamp_slaves)?;
+            Some(
+                crate::solve::is_stable(&model, &full, &x).map_err(|source| SceneError::Solve {
+                    stage: "out-of-plane stability check".into(),
+                    source,
+                })?,
+            )
+        } else {
+            None
+        };
         let surface = model.basis.surface();
         let mid = nx / 2;
         let (face_edge, u_edge) = if nx % 2 == 0 { (mid, 0.0) } else { (mid, 0.5) };
@@ -499,6 +534,7 @@ impl CantileverBend {
             load_steps: cont.steps,
             iterations: cont.iterations,
             report: cont.last,
+            stable_out_of_plane,
         })
     }
 }

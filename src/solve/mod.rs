@@ -397,6 +397,21 @@ enum Mode {
 /// without the residual falling tenfold (the paper's triggers), and when the line search cuts a
 /// Newton step below 1/8. After each backward-Euler step Newton is tried again; h is adapted
 /// like a trust region (μ ÷ 4 after a full step, × 4 after a cut one) and kept between uses.
+/// Whether `x` is a stable state of `system`: its reduced Hessian is positive definite (one
+/// assembly and one Cholesky attempt; meaningful at an equilibrium).
+pub fn is_stable(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<bool, SolveError> {
+    let mut x = x.to_vec();
+    system.apply_constraints(&mut x);
+    let mut grad = vec![[0.0; 3]; model.num_nodes()];
+    let mut hess = BlockMatrix::zeros(model.pattern.clone());
+    model
+        .assemble(&x, Want::Hessian, Some(&mut grad), Some(&mut hess))
+        .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+    let mut values = Vec::new();
+    system.values(&hess, &mut values);
+    Ok(system.try_factor(&values)?.is_some())
+}
+
 pub fn newton(
     model: &ShellModel,
     system: &FreeSystem,
