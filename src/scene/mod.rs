@@ -249,6 +249,8 @@ pub struct TensilePoint {
     /// N, the axial clamp reaction
     pub force: f64,
     pub report: SolveReport,
+    /// ∂force/∂k (law parameters, then thickness) when asked for, else empty
+    pub dforce: Vec<f64>,
 }
 
 impl TensileStrip {
@@ -270,9 +272,34 @@ impl TensileStrip {
         material: &FabricMaterial,
         elongations: &[f64],
     ) -> Result<Vec<TensilePoint>, SceneError> {
+        self.rig(material, elongations)?.run(false)
+    }
+
+    /// As [`TensileStrip::run`], each point also carrying ∂force/∂k when asked for.
+    pub fn run_with_sensitivities(
+        &self,
+        material: &FabricMaterial,
+        elongations: &[f64],
+        sensitivities: bool,
+    ) -> Result<Vec<TensilePoint>, SceneError> {
+        self.rig(material, elongations)?.run(sensitivities)
+    }
+
+    /// The strip set up once for repeated runs at the same elongations with changing material
+    /// parameters (the fitter's forward model).
+    pub fn rig(
+        &self,
+        material: &FabricMaterial,
+        elongations: &[f64],
+    ) -> Result<StripRig, SceneError> {
         positive("width", self.width)?;
         positive("gauge length", self.length)?;
-        let (nx, ny) = self.mesh;
+        if let Some(dl) = elongations.iter().find(|d| !d.is_finite()) {
+            return Err(SceneError::Input(format!(
+                "elongation must be finite, got {dl}"
+            )));
+        }
+        let (_, ny) = self.mesh;
         let model = build_model(
             material,
             self.width,
@@ -302,54 +329,159 @@ impl TensileStrip {
         let rate: Vec<f64> = std::iter::repeat_n(0.0, bottom.slaves.len())
             .chain(top.offset_rate.iter().copied())
             .collect();
-        let mut system = free_system(&model, &fixed, slaves)?;
-        let rest = model.basis.control_points.clone();
-        let mut x = rest.clone();
+        let system = free_system(&model, &fixed, slaves)?;
+        Ok(StripRig {
+            length: self.length,
+            solver: self.solver,
+            model,
+            system,
+            bottom_fixed: bottom.fixed,
+            top_fixed: top.fixed,
+            motion: top.motion,
+            base,
+            rate,
+            elongations: elongations.to_vec(),
+            equilibria: vec![None; elongations.len()],
+        })
+    }
+}
+
+/// A tensile strip ready to be run again and again: model, constraints and the last
+/// equilibrium at every elongation, which warm-starts the next run.
+pub struct StripRig {
+    length: f64,
+    pub solver: NewtonOptions,
+    model: ShellModel,
+    system: FreeSystem,
+    bottom_fixed: Vec<usize>,
+    top_fixed: Vec<usize>,
+    /// (DOF, rate): the pulled clamp's DOFs and how fast each moves with the elongation
+    motion: Vec<(usize, f64)>,
+    base: Vec<f64>,
+    rate: Vec<f64>,
+    elongations: Vec<f64>,
+    equilibria: Vec<Option<Vec<Vec3>>>,
+}
+
+impl StripRig {
+    /// Replaces the law and the thickness (the mesh, clamps and warm starts stay).
+    pub fn set_material(
+        &mut self,
+        law: &crate::material::Orthotropic,
+        thickness: f64,
+    ) -> Result<(), SceneError> {
+        self.model.law = Arc::new(law.clone());
+        self.model.set_thickness(thickness)?;
+        Ok(())
+    }
+
+    pub fn elongations(&self) -> &[f64] {
+        &self.elongations
+    }
+
+    /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's
+    /// parameters and then the thickness (adjoint form of Clyde et al. 2017, Eq. 6: with
+    /// F = rᵀg(x, k) and K λ = Tᵀ H r, dF/dk = rᵀ ∂g/∂k − λᵀ Tᵀ ∂g/∂k; one solve per point
+    /// whatever the number of parameters).
+    pub fn run(&mut self, sensitivities: bool) -> Result<Vec<TensilePoint>, SceneError> {
+        let nn = self.model.num_nodes();
+        let rest = self.model.basis.control_points.clone();
         let mut grad = vec![[0.0; 3]; nn];
-        let mut current = 0.0;
-        let mut out = Vec::with_capacity(elongations.len());
-        let _ = nx;
-        for &dl in elongations {
-            if !dl.is_finite() {
-                return Err(SceneError::Input(format!(
-                    "elongation must be finite, got {dl}"
-                )));
-            }
-            // predictor: stretch the last equilibrium affinely to the new jaw position
-            let s = (self.length + dl) / (self.length + current);
-            for p in &mut x {
-                p[1] *= s;
-            }
-            for &d in &bottom.fixed {
+        let mut out = Vec::with_capacity(self.elongations.len());
+        let mut previous: Option<(f64, Vec<Vec3>)> = None;
+        for i in 0..self.elongations.len() {
+            let dl = self.elongations[i];
+            let mut x = match (&self.equilibria[i], &previous) {
+                (Some(x), _) => x.clone(),
+                // predictor: stretch the last equilibrium affinely to the new jaw position
+                (None, prev) => {
+                    let (current, mut x) = prev.clone().unwrap_or((0.0, rest.clone()));
+                    let s = (self.length + dl) / (self.length + current);
+                    for p in &mut x {
+                        p[1] *= s;
+                    }
+                    x
+                }
+            };
+            for &d in &self.bottom_fixed {
                 x[d / 3][d % 3] = rest[d / 3][d % 3];
             }
-            for &d in &top.fixed {
+            for &d in &self.top_fixed {
                 x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
             }
-            let offsets: Vec<f64> = base.iter().zip(&rate).map(|(b, r)| b + r * dl).collect();
-            system.set_offsets(&offsets);
-            let report = equilibrium(&model, &system, &mut x, &self.solver, || {
-                format!("elongation {:.4} mm", dl * 1e3)
-            })?;
-            model
+            let offsets: Vec<f64> = self
+                .base
+                .iter()
+                .zip(&self.rate)
+                .map(|(b, r)| b + r * dl)
+                .collect();
+            self.system.set_offsets(&offsets);
+            let stage = || format!("elongation {:.4} mm", dl * 1e3);
+            let report = match equilibrium(&self.model, &self.system, &mut x, &self.solver, stage) {
+                Ok(r) => r,
+                Err(e) if self.equilibria[i].is_some() => {
+                    // the warm start came from other parameters: retry from the predictor
+                    self.equilibria[i] = None;
+                    let _ = e;
+                    return self.run(sensitivities);
+                }
+                Err(e) => return Err(e),
+            };
+            let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
+                stage: "reaction".into(),
+                source: SolveError::StartOutOfDomain(e.to_string()),
+            };
+            self.model
                 .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
-                .map_err(|e| SceneError::Solve {
-                    stage: "reaction".into(),
-                    source: SolveError::StartOutOfDomain(e.to_string()),
-                })?;
-            let force: f64 = top
+                .map_err(reaction_error)?;
+            let force: f64 = self
                 .motion
                 .iter()
                 .map(|&(d, r)| r * grad[d / 3][d % 3])
                 .sum();
+            let dforce = if sensitivities {
+                self.force_sensitivities(&x)
+                    .map_err(|source| SceneError::Solve {
+                        stage: format!("sensitivities at {}", stage()),
+                        source,
+                    })?
+            } else {
+                Vec::new()
+            };
             out.push(TensilePoint {
                 elongation: dl,
                 force,
                 report,
+                dforce,
             });
-            current = dl;
+            self.equilibria[i] = Some(x.clone());
+            previous = Some((dl, x));
         }
         Ok(out)
+    }
+
+    fn force_sensitivities(&self, x: &[Vec3]) -> Result<Vec<f64>, SolveError> {
+        let lin = crate::solve::Linearization::new(&self.model, &self.system, x)?;
+        let sens = self
+            .model
+            .sensitivities(x)
+            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+        let mut r = vec![[0.0; 3]; x.len()];
+        for &(d, c) in &self.motion {
+            r[d / 3][d % 3] += c;
+        }
+        let mut hr = vec![[0.0; 3]; x.len()];
+        lin.hessian.mul(&r, &mut hr);
+        let lambda = lin.solve_reduced(&self.system, &hr);
+        Ok(sens
+            .gradient
+            .iter()
+            .map(|dg| {
+                let direct: f64 = self.motion.iter().map(|&(d, c)| c * dg[d / 3][d % 3]).sum();
+                let reduced = self.system.reduced(dg);
+                direct - lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
+            })
+            .collect())
     }
 }
 

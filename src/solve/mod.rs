@@ -397,6 +397,68 @@ enum Mode {
 /// without the residual falling tenfold (the paper's triggers), and when the line search cuts a
 /// Newton step below 1/8. After each backward-Euler step Newton is tried again; h is adapted
 /// like a trust region (μ ÷ 4 after a full step, × 4 after a cut one) and kept between uses.
+/// The tangent of an equilibrium: the full Hessian H and the reduced K = Tᵀ H T, factorised
+/// once so that any number of right-hand sides are solved on it (the sensitivity system of
+/// Clyde et al. 2017, Eq. 6; constraints are eliminated, so no multipliers appear).
+pub struct Linearization {
+    pub hessian: BlockMatrix,
+    values: Vec<f64>,
+    llt: Llt<usize, f64>,
+}
+
+impl Linearization {
+    /// Assembles and factorises at `x` (an equilibrium of `system`). Fails if K is not
+    /// positive definite: a saddle has no unique sensitivity.
+    pub fn new(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<Self, SolveError> {
+        let mut grad = vec![[0.0; 3]; model.num_nodes()];
+        let mut hessian = BlockMatrix::zeros(model.pattern.clone());
+        model
+            .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hessian))
+            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+        let mut values = Vec::new();
+        system.values(&hessian, &mut values);
+        let llt = system.try_factor(&values)?.ok_or_else(|| {
+            SolveError::Linear("the equilibrium's Hessian is not positive definite".into())
+        })?;
+        Ok(Self {
+            hessian,
+            values,
+            llt,
+        })
+    }
+
+    /// K⁻¹ Tᵀ g for a full-length vector g (one refinement step with an f64 residual).
+    pub fn solve_reduced(&self, system: &FreeSystem, g: &[Vec3]) -> Vec<f64> {
+        let nf = system.num_free;
+        let mut rhs = vec![0.0; nf];
+        system.reduce(g, &mut rhs);
+        let mut d = rhs.clone();
+        self.llt
+            .solve_in_place(MatMut::from_column_major_slice_mut(&mut d, nf, 1));
+        refine::refine(
+            &system.sym_lower(&self.values),
+            &rhs,
+            &mut d,
+            Precision::F64,
+            1,
+            |r| {
+                self.llt
+                    .solve_in_place(MatMut::from_column_major_slice_mut(r, nf, 1))
+            },
+        );
+        d
+    }
+}
+
+impl FreeSystem {
+    /// Tᵀ g over the free DOFs, for a full-length vector g.
+    pub fn reduced(&self, g: &[Vec3]) -> Vec<f64> {
+        let mut out = vec![0.0; self.num_free];
+        self.reduce(g, &mut out);
+        out
+    }
+}
+
 /// Whether `x` is a stable state of `system`: its reduced Hessian is positive definite (one
 /// assembly and one Cholesky attempt; meaningful at an equilibrium).
 pub fn is_stable(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<bool, SolveError> {

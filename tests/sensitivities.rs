@@ -1,0 +1,78 @@
+//! Exact force and drape-angle sensitivities through the equilibrium (Clyde et al. 2017, Eq. 6)
+//! against central differences of full equilibrium solves.
+
+use kshell::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
+use kshell::scene::TensileStrip;
+
+fn material() -> FabricMaterial {
+    FabricMaterial {
+        name: "degree-2".into(),
+        areal_density: 0.1,
+        thickness: 3.0e-4,
+        law: Orthotropic {
+            a11: 2.0e8,
+            a22: 1.2e8,
+            a12: 0.6e8,
+            g12: 4.0e6,
+            warp: Eta {
+                mu: vec![0.6, 0.4],
+                alpha: vec![1.0, 300.0],
+            },
+            weft: Eta {
+                mu: vec![0.8, 0.2],
+                alpha: vec![2.0, 150.0],
+            },
+            shear: Eta {
+                mu: vec![0.7, 0.3],
+                alpha: vec![1.0, 40.0],
+            },
+            cutoffs: Cutoffs::none(),
+        },
+    }
+}
+
+fn forces(m: &FabricMaterial, angle: f64, elongations: &[f64], sens: bool) -> Vec<(f64, Vec<f64>)> {
+    let mut strip = TensileStrip::new(0.05, 0.075, angle);
+    strip.mesh = (4, 6);
+    strip.solver.rtol = 1e-13;
+    strip
+        .run_with_sensitivities(m, elongations, sens)
+        .unwrap()
+        .into_iter()
+        .map(|p| (p.force, p.dforce))
+        .collect()
+}
+
+#[test]
+fn strip_force_sensitivities_match_differences_of_full_solves() {
+    let m = material();
+    let elongations = [1.5e-3, 4.0e-3];
+    for angle in [90.0, 45.0, 22.5] {
+        let exact = forces(&m, angle, &elongations, true);
+        let mut k = m.law.params();
+        k.push(m.thickness);
+        for j in 0..k.len() {
+            let h = 1e-6 * k[j].abs().max(1e-3);
+            let at = |v: f64| {
+                let mut kk = k.clone();
+                kk[j] = v;
+                let mut mm = m.clone();
+                mm.law.set_params(&kk[..kk.len() - 1]);
+                mm.thickness = kk[kk.len() - 1];
+                forces(&mm, angle, &elongations, false)
+            };
+            let (plus, minus) = (at(k[j] + h), at(k[j] - h));
+            for (i, (f, df)) in exact.iter().enumerate() {
+                let fd = (plus[i].0 - minus[i].0) / (2.0 * h);
+                // compare in relative terms of the force per unit of relative parameter change
+                let scale = f.abs() / k[j].abs().max(1e-3);
+                assert!(
+                    (df[j] - fd).abs() <= 1e-5 * scale + 1e-7 * df[j].abs(),
+                    "angle {angle}, parameter {j} ({}), point {i}: exact {} vs differences {fd}",
+                    m.law.names().get(j).cloned().unwrap_or("thickness".into()),
+                    df[j]
+                );
+            }
+        }
+    }
+}
