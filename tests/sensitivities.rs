@@ -76,3 +76,44 @@ fn strip_force_sensitivities_match_differences_of_full_solves() {
         }
     }
 }
+
+#[test]
+fn drape_angle_sensitivities_match_differences_of_full_solves() {
+    use kshell::scene::{BendRig, CantileverBend};
+    let m = material();
+    let mut bend = CantileverBend::new(0.025, 0.15, 90.0);
+    bend.mesh = (4, 10);
+    bend.solver.rtol = 1e-13;
+    let angle = |mm: &FabricMaterial, sens: bool| {
+        let mut rig = BendRig::new(&bend, mm).unwrap();
+        rig.run(sens).unwrap()
+    };
+    let exact = angle(&m, true);
+    assert!(exact.drape_angle_deg > 5.0, "{}", exact.drape_angle_deg);
+    let mut k = m.law.params();
+    k.push(m.thickness);
+    // a11, a22, a12, g12, warp μ₂ and α₂, thickness (each a full load ramp twice)
+    for j in [0, 1, 2, 3, 5, 7, k.len() - 1] {
+        let h = 1e-6 * k[j].abs().max(1e-3);
+        let at = |v: f64| {
+            let mut kk = k.clone();
+            kk[j] = v;
+            let mut mm = m.clone();
+            mm.law.set_params(&kk[..kk.len() - 1]);
+            mm.thickness = kk[kk.len() - 1];
+            angle(&mm, false).drape_angle_deg
+        };
+        let fd = (at(k[j] + h) - at(k[j] - h)) / (2.0 * h);
+        let scale = exact.drape_angle_deg / k[j].abs().max(1e-3);
+        assert!(
+            (exact.dangle[j] - fd).abs() <= 1e-5 * scale + 1e-6 * fd.abs(),
+            "parameter {j}: exact {} vs differences {fd}",
+            exact.dangle[j]
+        );
+    }
+    // a warm-started rerun with the same material lands on the same angle
+    let mut rig = BendRig::new(&bend, &m).unwrap();
+    let first = rig.run(false).unwrap().drape_angle_deg;
+    let second = rig.run(false).unwrap().drape_angle_deg;
+    assert!((first - second).abs() < 1e-9 && (first - exact.drape_angle_deg).abs() < 1e-9);
+}

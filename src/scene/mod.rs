@@ -485,6 +485,169 @@ impl StripRig {
     }
 }
 
+/// An ASTM D1388 cantilever (self-weight only) set up once for repeated runs with changing
+/// material parameters: the fitter's forward model of a bend test. Each run starts from the
+/// last equilibrium, falling back to a load ramp from the flat strip.
+pub struct BendRig {
+    bend: CantileverBend,
+    model: ShellModel,
+    system: FreeSystem,
+    equilibrium: Option<Vec<Vec3>>,
+    /// (face, u) of the mid-width point of the clamped edge (v = 0) and of the tip (v = 1)
+    edge: (usize, f64),
+    tip: (usize, f64),
+}
+
+/// A bend run with, when asked for, ∂angle/∂k (law parameters, then thickness; degrees).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BendPoint {
+    pub drape_angle_deg: f64,
+    pub dangle: Vec<f64>,
+    pub report: SolveReport,
+}
+
+impl BendRig {
+    pub fn new(bend: &CantileverBend, material: &FabricMaterial) -> Result<Self, SceneError> {
+        positive("width", bend.width)?;
+        positive("overhang", bend.overhang)?;
+        let (nx, ny) = bend.mesh;
+        if ny < 2 {
+            return Err(SceneError::Input(
+                "the cantilever mesh needs at least 2 rows".into(),
+            ));
+        }
+        let mut model = build_model(
+            material,
+            bend.width,
+            bend.overhang,
+            bend.angle_deg,
+            bend.mesh,
+            bend.boundary,
+        )?;
+        let h = spacing(bend.width, bend.overhang, bend.mesh);
+        let clamp = edge_clamp(
+            &model,
+            bend.boundary,
+            bend.mesh,
+            h,
+            0,
+            1,
+            Hold::PositionAndSlope,
+        )?;
+        let mut fixed = vec![false; 3 * model.num_nodes()];
+        for &d in &clamp.fixed {
+            fixed[d] = true;
+        }
+        let system = free_system(&model, &fixed, clamp.slaves)?;
+        model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY]);
+        let mid = nx / 2;
+        let u = if nx % 2 == 0 { 0.0 } else { 0.5 };
+        Ok(Self {
+            bend: bend.clone(),
+            model,
+            system,
+            equilibrium: None,
+            edge: (mid, u),
+            tip: ((ny - 1) * nx + mid, u),
+        })
+    }
+
+    /// Replaces the law and the thickness (mesh, clamp and warm start stay).
+    pub fn set_material(
+        &mut self,
+        law: &crate::material::Orthotropic,
+        thickness: f64,
+    ) -> Result<(), SceneError> {
+        self.model.law = Arc::new(law.clone());
+        self.model.set_thickness(thickness)?;
+        Ok(())
+    }
+
+    pub fn run(&mut self, sensitivities: bool) -> Result<BendPoint, SceneError> {
+        let mut x = match &self.equilibrium {
+            Some(x) => x.clone(),
+            None => self.model.basis.control_points.clone(),
+        };
+        let warm = self.equilibrium.is_some();
+        let solved = if warm {
+            newton(&self.model, &self.system, &mut x, &self.bend.solver).ok()
+        } else {
+            None
+        };
+        let report = match solved {
+            Some(r) => r,
+            None => {
+                x = self.model.basis.control_points.clone();
+                let apply = |m: &mut ShellModel, t: f64, _: &[Vec3]| {
+                    m.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * t]);
+                };
+                let cont = continuation(
+                    &mut self.model,
+                    &self.system,
+                    &mut x,
+                    &self.bend.solver,
+                    1.0,
+                    apply,
+                )
+                .map_err(|(t, source)| SceneError::Solve {
+                    stage: format!("load factor {t:.4}"),
+                    source,
+                })?;
+                cont.last
+            }
+        };
+        let surface = self.model.basis.surface();
+        let stencil = |(face, u): (usize, f64), v: f64| {
+            surface
+                .stencil(face, u, v)
+                .map_err(|e| SceneError::Basis(e.into()))
+        };
+        let (se, st) = (stencil(self.edge, 0.0)?, stencil(self.tip, 1.0)?);
+        let (e, t) = (se.apply(&x).x(), st.apply(&x).x());
+        let (dy, dz) = (t[1] - e[1], -(t[2] - e[2]));
+        let angle = dz.atan2(dy).to_degrees();
+        let dangle = if sensitivities {
+            // ∂angle/∂x: through dy and dz at the tip (+) and the edge (−) point
+            let r2 = dy * dy + dz * dz;
+            let (ay, az) = (-dz / r2, dy / r2);
+            let mut c = vec![[0.0; 3]; x.len()];
+            for (s, sign) in [(&st, 1.0), (&se, -1.0)] {
+                for (&i, w) in s.indices.iter().zip(&s.weights) {
+                    c[i as usize][1] += sign * w[0] * ay;
+                    c[i as usize][2] -= sign * w[0] * az;
+                }
+            }
+            let fail = |source| SceneError::Solve {
+                stage: "drape-angle sensitivities".into(),
+                source,
+            };
+            let lin = crate::solve::Linearization::new(&self.model, &self.system, &x)
+                .map_err(fail)?;
+            let lambda = lin.solve_reduced(&self.system, &c);
+            let sens = self.model.sensitivities(&x).map_err(|e| {
+                fail(SolveError::StartOutOfDomain(e.to_string()))
+            })?;
+            sens.gradient
+                .iter()
+                .map(|dg| {
+                    let reduced = self.system.reduced(dg);
+                    -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
+                        * 180.0
+                        / std::f64::consts::PI
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        self.equilibrium = Some(x);
+        Ok(BendPoint {
+            drape_angle_deg: angle,
+            dangle,
+            report,
+        })
+    }
+}
+
 /// ASTM D1388 cantilever: a strip of `width` overhanging the platform edge by `overhang`, the
 /// part on the platform clamped (the edge keeps its position and its horizontal slope; see
 /// [`BoundaryRule`] for how each rule does it), sagging under gravity.
