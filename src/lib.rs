@@ -15,6 +15,7 @@
 pub mod assembly;
 pub mod atlas;
 pub mod converge;
+pub mod fit;
 pub mod material;
 pub mod mesh;
 pub mod quadrature;

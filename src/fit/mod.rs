@@ -1,0 +1,2 @@
+//! Fitting a fabric's test data (Clyde et al. 2017 §5).
+pub mod optim;
