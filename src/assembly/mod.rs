@@ -825,11 +825,46 @@ impl ShellModel {
         Ok(())
     }
 
+    /// The smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12, warp/weft frame) over the
+    /// Gauss points at `x`: what a test actually exercised.
+    pub fn membrane_strain_range(&self, x: &[Vec3]) -> ([f64; 3], [f64; 3]) {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for q in 0..self.basis.num_points() {
+            let (idx, w) = self.basis.stencil(q);
+            let mut d = [[0.0; 3]; 6];
+            for (&i, wi) in idx.iter().zip(w) {
+                for k in 1..6 {
+                    for c in 0..3 {
+                        d[k][c] += wi[k] * x[i as usize][c];
+                    }
+                }
+            }
+            let (m, _) = self.rest[q].strain_values(&kinematic_vector(&d));
+            for c in 0..3 {
+                lo[c] = lo[c].min(m[c]);
+                hi[c] = hi[c].max(m[c]);
+            }
+        }
+        (lo, hi)
+    }
+
     /// ∂E/∂k and ∂(∂E/∂x)/∂k at `x` for every parameter k of the law and, last, the thickness
     /// τ (the fitter's right-hand sides, paper Eq. 6). With the thickness rule ξ_q = τ t_q / 2,
     /// w̃_q = τ w_q / 2, the τ-derivative is that of the quadrature actually used:
     /// ∂/∂τ Σ w̃ ψ(Ẽ_m + ξ Ẽ_b) = Σ (w̃/τ) ψ + Σ w̃ (ξ/τ) S·Ẽ_b.
     pub fn sensitivities(&self, x: &[Vec3]) -> Result<Sensitivities, OutOfDomain> {
+        self.sensitivities_of(x, None)
+    }
+
+    /// [`ShellModel::sensitivities`] for the parameters marked true only (law parameters, then
+    /// thickness; `None`: all); the others are left at zero.
+    pub fn sensitivities_of(
+        &self,
+        x: &[Vec3],
+        wanted: Option<&[bool]>,
+    ) -> Result<Sensitivities, OutOfDomain> {
+        let want = |j: usize| wanted.is_none_or(|w| w.get(j).copied().unwrap_or(true));
         let mut names = self.law.param_names();
         names.push("thickness".into());
         let np = names.len();
@@ -868,8 +903,13 @@ impl ShellModel {
                     out
                 };
                 for j in 0..np - 1 {
-                    dey[j] += wt * pr.dpsi[j];
-                    dgy[j] += wt * gt(&pr.dstress[j]);
+                    if want(j) {
+                        dey[j] += wt * pr.dpsi[j];
+                        dgy[j] += wt * gt(&pr.dstress[j]);
+                    }
+                }
+                if !want(np - 1) {
+                    continue;
                 }
                 let jt = np - 1;
                 dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
@@ -882,6 +922,9 @@ impl ShellModel {
                     + (wt * xi / tau) * gt(&(r.tangent * eb));
             }
             for j in 0..np {
+                if !want(j) {
+                    continue;
+                }
                 energy[j] += da * dey[j];
                 for (&i, wi) in idx.iter().zip(w) {
                     for k in 0..5 {

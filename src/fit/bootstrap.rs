@@ -156,7 +156,11 @@ mod tests {
         let lambda = 1.0 + dl / len;
         let e11 = 0.5 * (lambda * lambda - 1.0);
         let expected = w * tau * lambda * (law.a11 - law.a12 * law.a12 / law.a22) * e11;
-        assert!((p.force / expected - 1.0).abs() < 1e-12, "{} vs {expected}", p.force);
+        assert!(
+            (p.force / expected - 1.0).abs() < 1e-12,
+            "{} vs {expected}",
+            p.force
+        );
     }
 
     #[test]

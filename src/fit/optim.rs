@@ -22,7 +22,10 @@ impl Evaluation {
 
     /// ∇ε = 2 Jᵀ r.
     fn gradient(&self) -> DVector<f64> {
-        let j = self.jacobian.as_ref().expect("gradient asked without a Jacobian");
+        let j = self
+            .jacobian
+            .as_ref()
+            .expect("gradient asked without a Jacobian");
         2.0 * j.transpose() * DVector::from_column_slice(&self.residuals)
     }
 }
@@ -93,7 +96,9 @@ pub fn minimize<E>(
     report.evaluations += 1;
     let mut eval = |q: &[f64], jac: bool, report: &mut OptimReport| {
         report.evaluations += 1;
-        problem(q, jac).ok().filter(|e| e.residuals.iter().all(|r| r.is_finite()))
+        problem(q, jac)
+            .ok()
+            .filter(|e| e.residuals.iter().all(|r| r.is_finite()))
     };
     match opts.method {
         Method::Bfgs => bfgs(p, first, opts, &mut report, &mut eval),
@@ -115,8 +120,13 @@ fn bfgs(
     let mut x = DVector::from_column_slice(p);
     let mut f = first.objective();
     let mut g = first.gradient();
-    let mut h = DMatrix::<f64>::identity(n, n);
-    let mut scaled = false;
+    // initial inverse Hessian: the Gauss–Newton matrix (2 JᵀJ)⁻¹ of the first point, the
+    // exact Hessian of a zero-residual fit; the identity (scaled after the first step) if it
+    // is singular
+    let (mut h, mut scaled) = match gauss_newton_inverse(&first) {
+        Some(h) => (h, true),
+        None => (DMatrix::<f64>::identity(n, n), false),
+    };
     report.stop = "iteration limit".into();
     for it in 0..opts.max_iterations {
         report.iterations = it;
@@ -177,6 +187,21 @@ fn bfgs(
     report.objective = f;
 }
 
+/// (2 JᵀJ + δI)⁻¹ with δ = 1e-10 of the mean diagonal, if that is positive definite.
+fn gauss_newton_inverse(e: &Evaluation) -> Option<DMatrix<f64>> {
+    let j = e.jacobian.as_ref()?;
+    let n = j.ncols();
+    let mut a = 2.0 * j.transpose() * j;
+    let shift = 1e-10 * a.trace() / n as f64;
+    if !(shift > 0.0 && shift.is_finite()) {
+        return None;
+    }
+    for i in 0..n {
+        a[(i, i)] += shift;
+    }
+    a.cholesky().map(|c| c.inverse())
+}
+
 /// A trial point of the line search: α, ε, ∇ε and the slope ∇ε·d.
 type Trial = (f64, f64, DVector<f64>, f64);
 
@@ -214,8 +239,16 @@ fn strong_wolfe(
             return Some((t.0, t.1, t.2));
         }
         if t.3 >= 0.0 {
-            return zoom(t.clone(), Some(prev.clone()), prev.0, f0, slope0, &mut phi, report)
-                .or(Some((t.0, t.1, t.2)));
+            return zoom(
+                t.clone(),
+                Some(prev.clone()),
+                prev.0,
+                f0,
+                slope0,
+                &mut phi,
+                report,
+            )
+            .or(Some((t.0, t.1, t.2)));
         }
         prev = t;
         a *= 2.0;

@@ -9,7 +9,7 @@
 mod file;
 mod orthotropic;
 
-pub use file::{load_material, parse_material, FabricMaterial, MaterialFileError};
+pub use file::{load_material, material_toml, parse_material, FabricMaterial, MaterialFileError};
 pub use orthotropic::{Cutoffs, Eta, Orthotropic, ParamResponse};
 
 use nalgebra::{Matrix3, Vector3};

@@ -342,6 +342,13 @@ impl TensileStrip {
             rate,
             elongations: elongations.to_vec(),
             equilibria: vec![None; elongations.len()],
+            tangents: vec![None; elongations.len()],
+            params: {
+                let mut k = material.law.params();
+                k.push(material.thickness);
+                k
+            },
+            wanted: None,
         })
     }
 }
@@ -361,6 +368,12 @@ pub struct StripRig {
     rate: Vec<f64>,
     elongations: Vec<f64>,
     equilibria: Vec<Option<Vec<Vec3>>>,
+    /// per point: the parameters (law, then thickness) of its equilibrium and ∂q/∂k there,
+    /// which predict the equilibrium for new parameters (q + ∂q/∂k Δk)
+    tangents: Vec<Option<(Vec<f64>, Vec<Vec<f64>>)>>,
+    params: Vec<f64>,
+    /// which parameters' sensitivities to compute (all when `None`; the others come back 0)
+    wanted: Option<Vec<bool>>,
 }
 
 impl StripRig {
@@ -372,7 +385,22 @@ impl StripRig {
     ) -> Result<(), SceneError> {
         self.model.law = Arc::new(law.clone());
         self.model.set_thickness(thickness)?;
+        self.params = law.params();
+        self.params.push(thickness);
         Ok(())
+    }
+
+    /// Restricts the sensitivities to the parameters marked true (law parameters, then
+    /// thickness); the others are reported as 0. `None`: all.
+    pub fn set_wanted(&mut self, wanted: Option<Vec<bool>>) {
+        self.wanted = wanted;
+    }
+
+    /// Smallest and largest membrane strain (warp/weft frame) of the last run's equilibrium at
+    /// the largest elongation.
+    pub fn strain_range(&self) -> Option<([f64; 3], [f64; 3])> {
+        let x = self.equilibria.last()?.as_ref()?;
+        Some(self.model.membrane_strain_range(x))
     }
 
     pub fn elongations(&self) -> &[f64] {
@@ -392,7 +420,23 @@ impl StripRig {
         for i in 0..self.elongations.len() {
             let dl = self.elongations[i];
             let mut x = match (&self.equilibria[i], &previous) {
-                (Some(x), _) => x.clone(),
+                (Some(x), _) => {
+                    let mut x = x.clone();
+                    // first-order predictor along the parameter change
+                    if let Some((k0, dq)) = &self.tangents[i] {
+                        if k0.len() == self.params.len() {
+                            let mut d = vec![0.0; self.system.num_free];
+                            for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
+                                let dk = k - k0;
+                                if dk != 0.0 {
+                                    d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
+                                }
+                            }
+                            self.system.advance(&mut x, &d);
+                        }
+                    }
+                    x
+                }
                 // predictor: stretch the last equilibrium affinely to the new jaw position
                 (None, prev) => {
                     let (current, mut x) = prev.clone().unwrap_or((0.0, rest.clone()));
@@ -417,7 +461,13 @@ impl StripRig {
                 .collect();
             self.system.set_offsets(&offsets);
             let stage = || format!("elongation {:.4} mm", dl * 1e3);
-            let report = match equilibrium(&self.model, &self.system, &mut x, &self.solver, stage) {
+            let solved =
+                crate::solve::newton_linearized(&self.model, &self.system, &mut x, &self.solver)
+                    .map_err(|source| SceneError::Solve {
+                        stage: stage(),
+                        source,
+                    });
+            let (report, lin) = match solved {
                 Ok(r) => r,
                 Err(e) if self.equilibria[i].is_some() => {
                     // the warm start came from other parameters: retry from the predictor
@@ -440,12 +490,16 @@ impl StripRig {
                 .map(|&(d, r)| r * grad[d / 3][d % 3])
                 .sum();
             let dforce = if sensitivities {
-                self.force_sensitivities(&x)
-                    .map_err(|source| SceneError::Solve {
-                        stage: format!("sensitivities at {}", stage()),
-                        source,
-                    })?
+                let (df, dq) =
+                    self.force_sensitivities(&x, lin)
+                        .map_err(|source| SceneError::Solve {
+                            stage: format!("sensitivities at {}", stage()),
+                            source,
+                        })?;
+                self.tangents[i] = Some((self.params.clone(), dq));
+                df
             } else {
+                self.tangents[i] = None;
                 Vec::new()
             };
             out.push(TensilePoint {
@@ -460,11 +514,20 @@ impl StripRig {
         Ok(out)
     }
 
-    fn force_sensitivities(&self, x: &[Vec3]) -> Result<Vec<f64>, SolveError> {
-        let lin = crate::solve::Linearization::new(&self.model, &self.system, x)?;
+    /// ∂F/∂k and ∂q/∂k (reduced) for every parameter.
+    #[allow(clippy::type_complexity)]
+    fn force_sensitivities(
+        &self,
+        x: &[Vec3],
+        lin: Option<crate::solve::Linearization>,
+    ) -> Result<(Vec<f64>, Vec<Vec<f64>>), SolveError> {
+        let lin = match lin {
+            Some(l) => l,
+            None => crate::solve::Linearization::new(&self.model, &self.system, x)?,
+        };
         let sens = self
             .model
-            .sensitivities(x)
+            .sensitivities_of(x, self.wanted.as_deref())
             .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
         let mut r = vec![[0.0; 3]; x.len()];
         for &(d, c) in &self.motion {
@@ -473,15 +536,29 @@ impl StripRig {
         let mut hr = vec![[0.0; 3]; x.len()];
         lin.hessian.mul(&r, &mut hr);
         let lambda = lin.solve_reduced(&self.system, &hr);
-        Ok(sens
+        let mut dq = Vec::with_capacity(sens.gradient.len());
+        let df = sens
             .gradient
             .iter()
-            .map(|dg| {
+            .enumerate()
+            .map(|(j, dg)| {
+                if self.wanted.as_ref().is_some_and(|w| !w[j]) {
+                    dq.push(vec![0.0; self.system.num_free]);
+                    return 0.0;
+                }
                 let direct: f64 = self.motion.iter().map(|&(d, c)| c * dg[d / 3][d % 3]).sum();
                 let reduced = self.system.reduced(dg);
+                // ∂q/∂k = −K⁻¹ Tᵀ ∂g/∂k, kept for the next run's predictor
+                dq.push(
+                    lin.solve_reduced(&self.system, dg)
+                        .iter()
+                        .map(|v| -v)
+                        .collect(),
+                );
                 direct - lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
             })
-            .collect())
+            .collect();
+        Ok((df, dq))
     }
 }
 
@@ -621,18 +698,18 @@ impl BendRig {
                 stage: "drape-angle sensitivities".into(),
                 source,
             };
-            let lin = crate::solve::Linearization::new(&self.model, &self.system, &x)
-                .map_err(fail)?;
+            let lin =
+                crate::solve::Linearization::new(&self.model, &self.system, &x).map_err(fail)?;
             let lambda = lin.solve_reduced(&self.system, &c);
-            let sens = self.model.sensitivities(&x).map_err(|e| {
-                fail(SolveError::StartOutOfDomain(e.to_string()))
-            })?;
+            let sens = self
+                .model
+                .sensitivities(&x)
+                .map_err(|e| fail(SolveError::StartOutOfDomain(e.to_string())))?;
             sens.gradient
                 .iter()
                 .map(|dg| {
                     let reduced = self.system.reduced(dg);
-                    -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
-                        * 180.0
+                    -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>() * 180.0
                         / std::f64::consts::PI
                 })
                 .collect()

@@ -451,6 +451,11 @@ impl Linearization {
 }
 
 impl FreeSystem {
+    /// x ← x + T d: free DOFs moved by d, slaved DOFs re-derived.
+    pub fn advance(&self, x: &mut [Vec3], d: &[f64]) {
+        self.step(x, d, 1.0);
+    }
+
     /// Tᵀ g over the free DOFs, for a full-length vector g.
     pub fn reduced(&self, g: &[Vec3]) -> Vec<f64> {
         let mut out = vec![0.0; self.num_free];
@@ -480,6 +485,18 @@ pub fn newton(
     x: &mut [Vec3],
     opts: &NewtonOptions,
 ) -> Result<SolveReport, SolveError> {
+    newton_linearized(model, system, x, opts).map(|r| r.0)
+}
+
+/// [`newton`], also handing back the factorised tangent at the solution when it is positive
+/// definite (the stability check factorises it anyway): sensitivities then cost no further
+/// assembly or factorisation.
+pub fn newton_linearized(
+    model: &ShellModel,
+    system: &FreeSystem,
+    x: &mut [Vec3],
+    opts: &NewtonOptions,
+) -> Result<(SolveReport, Option<Linearization>), SolveError> {
     let t0 = Instant::now();
     let nn = model.num_nodes();
     let nf = system.num_free;
@@ -537,7 +554,8 @@ pub fn newton(
             report.precision_limited = gnorm > opts.rtol * scale;
             // an equilibrium whose Hessian is not positive definite is a saddle (a flat strip in
             // compression, held there by its own symmetry): nudge it off and go on
-            let stable = system.try_factor(&values)?.is_some();
+            let llt = system.try_factor(&values)?;
+            let stable = llt.is_some();
             if !stable && opts.fallback && report.saddle_escapes < 5 && it < opts.max_iterations {
                 report.saddle_escapes += 1;
                 perturb(system, x, &mut seed);
@@ -547,7 +565,12 @@ pub fn newton(
             }
             report.stable = stable;
             report.seconds = t0.elapsed().as_secs_f64();
-            return Ok(report);
+            let lin = llt.map(|llt| Linearization {
+                hessian: hess,
+                values,
+                llt,
+            });
+            return Ok((report, lin));
         }
         if it == opts.max_iterations {
             break;
