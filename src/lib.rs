@@ -8,6 +8,7 @@
 //! | [`mesh`] | quad control meshes: OBJ input/output, grids, topology checks, uniform Catmull–Clark refinement |
 //! | [`subdiv`] | the exact Catmull–Clark limit basis: per-point stencils for x, x_u, x_v, x_uu, x_uv, x_vv |
 //! | [`quadrature`] | Gauss–Legendre rules on faces and through the thickness |
+//! | [`dataset`] | the fabric dataset: `fabric.toml` and its CSV curves, read, checked, written |
 //!
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
 //! plain structs of arrays; see `DESIGN.md` in the repository for the map.
@@ -15,6 +16,7 @@
 pub mod assembly;
 pub mod atlas;
 pub mod converge;
+pub mod dataset;
 pub mod fit;
 pub mod material;
 pub mod mesh;
