@@ -9,6 +9,7 @@
 //! | [`subdiv`] | the exact Catmull–Clark limit basis: per-point stencils for x, x_u, x_v, x_uu, x_uv, x_vv |
 //! | [`quadrature`] | Gauss–Legendre rules on faces and through the thickness |
 //! | [`dataset`] | the fabric dataset: `fabric.toml` and its CSV curves, read, checked, written |
+//! | [`synth`] | synthetic datasets from a material through the virtual lab |
 //!
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
 //! plain structs of arrays; see `DESIGN.md` in the repository for the map.
@@ -25,6 +26,7 @@ pub mod scene;
 pub mod shell;
 pub mod solve;
 pub mod subdiv;
+pub mod synth;
 
 /// A point or vector in 3-space, SI units inside the engine.
 pub type Vec3 = [f64; 3];

@@ -93,6 +93,43 @@ enum Command {
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+    /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
+    /// and what the fit will do with it, then any warnings; exit 2 on an error.
+    Check {
+        /// The dataset's fabric.toml.
+        file: PathBuf,
+    },
+    /// Write a synthetic dataset from a material through the virtual lab: tensile strips at
+    /// 90, 0, 45, 22.5 and 67.5 degrees, and the warp and weft cantilevers at 41.5 degrees.
+    Synth {
+        /// Material file (TOML).
+        #[arg(long)]
+        material: PathBuf,
+        /// Output folder (fabric.toml and the curves).
+        #[arg(long)]
+        out: PathBuf,
+        /// Largest engineering strain of the tensile curves.
+        #[arg(long, default_value_t = 0.1)]
+        max_strain: f64,
+        /// Points per tensile curve.
+        #[arg(long, default_value_t = 20)]
+        points: usize,
+        /// Curves per tensile angle.
+        #[arg(long, default_value_t = 1)]
+        repeats: usize,
+        /// Relative force noise: each repeat scaled by 1 + REL·z, each point by 1 + REL/10·z.
+        #[arg(long, default_value_t = 0.0)]
+        noise: f64,
+        /// Standard deviation of each repeat's cut angle, degrees.
+        #[arg(long, default_value_t = 0.0)]
+        misalign: f64,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Tensile strip mesh, faces across × along.
+        #[arg(long, value_parser = parse_mesh, default_value = "16x24")]
+        mesh: (usize, usize),
+    },
 }
 
 /// Options shared by the scene commands.
@@ -261,6 +298,30 @@ fn main() -> ExitCode {
         } => cmd_bend(&material, angle, overhang, width, &solve),
         Command::Converge { scene } => cmd_converge(scene),
         Command::Demo => cmd_demo(),
+        Command::Check { file } => cmd_check(&file),
+        Command::Synth {
+            material,
+            out,
+            max_strain,
+            points,
+            repeats,
+            noise,
+            misalign,
+            seed,
+            mesh,
+        } => cmd_synth(
+            &material,
+            &out,
+            &kshell::synth::SynthOptions {
+                max_strain,
+                points,
+                repeats,
+                noise,
+                misalign_deg: misalign,
+                seed,
+                mesh,
+            },
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -702,5 +763,115 @@ fn cmd_demo() -> Result<(), String> {
             t0.elapsed().as_secs_f64() * 1e3
         );
     }
+    Ok(())
+}
+
+fn cmd_check(file: &std::path::Path) -> Result<(), String> {
+    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    println!("dataset: {}", file.display());
+    println!("name: {}", data.name);
+    match data.areal_density {
+        Some(rho) => println!("areal density: {} g/m²", rho * 1e3),
+        None => println!("areal density: not given"),
+    }
+    println!(
+        "thickness: {} mm (measured; the fit's initial guess)",
+        data.thickness * 1e3
+    );
+    println!(
+        "tests: {} tensile, {} bend",
+        data.tensile.len(),
+        data.bend.len()
+    );
+    println!(
+        "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",
+        "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"
+    );
+    let mut info = Vec::new();
+    for t in &data.tensile {
+        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
+        let role = if t.is_fitted() {
+            "fitted"
+        } else {
+            info.push(format!(
+                "info: tensile {}° ({}) is not at 0, 45 or 90°: a validation test (predicted, not fitted)",
+                t.angle_deg,
+                t.curve.display()
+            ));
+            "validation"
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14.4} {:>12.4}  {role} ({})",
+            "tensile",
+            t.angle_deg,
+            t.width * 1e3,
+            t.gauge_length * 1e3,
+            t.elongation.len(),
+            max_elong * 1e3,
+            max_force,
+            t.curve.display()
+        );
+    }
+    for b in &data.bend {
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  fitted (drape {}°)",
+            "bend",
+            b.angle_deg,
+            b.width * 1e3,
+            b.overhang * 1e3,
+            "-",
+            "-",
+            "-",
+            b.drape_angle_deg
+        );
+    }
+    for l in &info {
+        println!("{l}");
+    }
+    for w in &warnings {
+        println!("{w}");
+    }
+    println!(
+        "valid{}",
+        match warnings.len() {
+            0 => String::new(),
+            1 => " (1 warning)".into(),
+            n => format!(" ({n} warnings)"),
+        }
+    );
+    Ok(())
+}
+
+fn cmd_synth(
+    material: &std::path::Path,
+    out: &std::path::Path,
+    opts: &kshell::synth::SynthOptions,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
+    let data = kshell::synth::synthesize(&mat, opts, &mut progress).map_err(|e| e.to_string())?;
+    let comment = format!(
+        "SYNTHETIC dataset written by ks-fit synth from the material {}\n\
+         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{}\n\
+         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees",
+        material.display(),
+        opts.max_strain,
+        opts.points,
+        opts.repeats,
+        opts.noise,
+        opts.misalign_deg,
+        opts.seed,
+        opts.mesh.0,
+        opts.mesh.1
+    );
+    kshell::dataset::write_dataset_with_comment(out, &data, &comment)
+        .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;
+    println!(
+        "wrote {} ({} tensile curves, {} bend tests)",
+        out.join("fabric.toml").display(),
+        data.tensile.len(),
+        data.bend.len()
+    );
     Ok(())
 }

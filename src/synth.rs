@@ -1,0 +1,518 @@
+//! Synthetic datasets: a material's lab tests run in the virtual lab ([`crate::scene`]), written
+//! as a [`FabricDataset`] the fitter can be checked against (its answer is known).
+//!
+//! * Tensile strips 50 × 75 mm at 90° (warp), 0° (weft), 45° (bias), 22.5° and 67.5° (the last
+//!   two are validation angles), `points` elongations evenly spaced from max_strain/points to
+//!   max_strain times the gauge length, on the `mesh` given.
+//! * Two cantilevers (90° and 0°), 25 mm wide, each at the overhang whose drape angle is 41.5°
+//!   (to 1e-4°): bracketed from twice the bending length c = (D/(ρg))^⅓, D = a·τ³/12 (a11 for
+//!   the warp, a22 for the weft), then refined by secant steps in ln(overhang), kept inside the bracket. The cantilever keeps
+//!   [`CantileverBend::new`]'s own mesh (elements of about 6.25 mm), so `ks-fit bend` at the
+//!   written overhang reproduces 41.5°.
+//! * `repeats` curves per tensile angle. With `noise` = REL each repeat's forces are scaled by
+//!   one factor 1 + REL·z (z standard normal, the factor held at ≥ 0) and each point by
+//!   1 + REL/10·z; with `misalign_deg` each repeat's strip is cut at its nominal angle + DEG·z
+//!   (the dataset records the nominal angle). Bends are exact. The random numbers (splitmix64
+//!   and Box–Muller) depend only on `seed`; noise 0 and misalignment 0 give the exact curves.
+
+use crate::dataset::{BendTest, FabricDataset, TensileTest, DEFAULT_DRAPE_ANGLE_DEG};
+use crate::material::FabricMaterial;
+use crate::scene::{CantileverBend, SceneError, TensileStrip};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Tensile angles (from the weft) and their curve-file stems, in the order written.
+pub const SYNTH_TENSILE: [(f64, &str); 5] = [
+    (90.0, "warp"),
+    (0.0, "weft"),
+    (45.0, "bias"),
+    (22.5, "a22.5"),
+    (67.5, "a67.5"),
+];
+
+/// Strip width and gauge length, m.
+const STRIP: (f64, f64) = (0.05, 0.075);
+/// Cantilever width, m.
+const BEND_WIDTH: f64 = 0.025;
+/// Drape-angle tolerance of the overhang search, degrees.
+const ANGLE_TOL: f64 = 1e-4;
+
+/// How to synthesise a dataset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthOptions {
+    /// Largest engineering strain of the tensile curves, in (0, 1].
+    pub max_strain: f64,
+    /// Points per tensile curve, ≥ 1.
+    pub points: usize,
+    /// Curves per tensile angle, ≥ 1.
+    pub repeats: usize,
+    /// Relative force noise (see the module), in [0, 1).
+    pub noise: f64,
+    /// Standard deviation of each repeat's cut angle, degrees, ≥ 0.
+    pub misalign_deg: f64,
+    pub seed: u64,
+    /// Tensile strip mesh, faces across × along.
+    pub mesh: (usize, usize),
+}
+
+impl Default for SynthOptions {
+    fn default() -> Self {
+        Self {
+            max_strain: 0.1,
+            points: 20,
+            repeats: 1,
+            noise: 0.0,
+            misalign_deg: 0.0,
+            seed: 1,
+            mesh: (16, 24),
+        }
+    }
+}
+
+/// A dataset could not be synthesised.
+#[derive(Debug, thiserror::Error)]
+pub enum SynthError {
+    #[error("{0}")]
+    Options(String),
+    #[error("{test}: {source}")]
+    Scene { test: String, source: SceneError },
+    #[error("{0}")]
+    Bracket(String),
+}
+
+/// splitmix64 with Box–Muller normals: small, deterministic, no dependency.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in (0, 1].
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) + 1) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+
+    /// Standard normal (one Box–Muller draw; the second value is discarded).
+    fn normal(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+impl SynthOptions {
+    fn check(&self) -> Result<(), SynthError> {
+        let bad = |m: String| Err(SynthError::Options(m));
+        if !(self.max_strain.is_finite() && self.max_strain > 0.0 && self.max_strain <= 1.0) {
+            return bad(format!(
+                "max strain must be in (0, 1], got {}",
+                self.max_strain
+            ));
+        }
+        if self.points == 0 {
+            return bad("points must be at least 1".into());
+        }
+        if self.repeats == 0 {
+            return bad("repeats must be at least 1".into());
+        }
+        if !(self.noise.is_finite() && (0.0..1.0).contains(&self.noise)) {
+            return bad(format!(
+                "noise must be a relative size in [0, 1), got {}",
+                self.noise
+            ));
+        }
+        if !(self.misalign_deg.is_finite() && self.misalign_deg >= 0.0) {
+            return bad(format!(
+                "misalignment must be a finite non-negative number of degrees, got {}",
+                self.misalign_deg
+            ));
+        }
+        if self.mesh.0 == 0 || self.mesh.1 == 0 {
+            return bad(format!(
+                "the strip mesh needs at least 1 face each way, got {}x{}",
+                self.mesh.0, self.mesh.1
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Runs the virtual lab on `material` as `opts` says; `progress` gets one line per test.
+pub fn synthesize(
+    material: &FabricMaterial,
+    opts: &SynthOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<FabricDataset, SynthError> {
+    opts.check()?;
+    let start = Instant::now();
+    let tensile = synth_tensile(material, opts, start, progress)?;
+    let mut bend = Vec::new();
+    for (angle, stem, a) in [
+        (90.0, "warp", material.law.a11),
+        (0.0, "weft", material.law.a22),
+    ] {
+        let t0 = Instant::now();
+        let test = format!("cantilever {stem} ({angle}°)");
+        let solves = std::cell::Cell::new(0);
+        let overhang = find_overhang(material, angle, a, &test, &solves)?;
+        progress(&format!(
+            "{test}: overhang {:.4} mm for {:.5}° ({} solves) in {:.2} s (elapsed {:.1} s)",
+            overhang.0 * 1e3,
+            overhang.1,
+            solves.get(),
+            t0.elapsed().as_secs_f64(),
+            start.elapsed().as_secs_f64()
+        ));
+        bend.push(BendTest {
+            angle_deg: angle,
+            width: BEND_WIDTH,
+            overhang: overhang.0,
+            drape_angle_deg: DEFAULT_DRAPE_ANGLE_DEG,
+        });
+    }
+    Ok(FabricDataset {
+        name: format!("{}-synthetic", material.name),
+        path: PathBuf::from("fabric.toml"),
+        areal_density: Some(material.areal_density),
+        thickness: material.thickness,
+        tensile,
+        bend,
+    })
+}
+
+/// The tensile curves of [`synthesize`], in [`SYNTH_TENSILE`] order, repeats together.
+fn synth_tensile(
+    material: &FabricMaterial,
+    opts: &SynthOptions,
+    start: Instant,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<TensileTest>, SynthError> {
+    let mut rng = Rng(opts.seed);
+    let (width, gauge) = STRIP;
+    let n = opts.points;
+    let elongations: Vec<f64> = (1..=n)
+        .map(|i| opts.max_strain * gauge * i as f64 / n as f64)
+        .collect();
+    let run_strip = |angle: f64, test: &str| -> Result<Vec<f64>, SynthError> {
+        let mut strip = TensileStrip::new(width, gauge, angle);
+        strip.mesh = opts.mesh;
+        let curve = strip
+            .run(material, &elongations)
+            .map_err(|source| SynthError::Scene {
+                test: test.to_string(),
+                source,
+            })?;
+        Ok(curve.iter().map(|p| p.force).collect())
+    };
+    let mut tensile = Vec::new();
+    for (angle, stem) in SYNTH_TENSILE {
+        // the exact curve, shared by every repeat cut at the nominal angle
+        let mut exact: Option<Vec<f64>> = None;
+        for r in 1..=opts.repeats {
+            let t0 = Instant::now();
+            let scale_z = rng.normal();
+            let angle_z = rng.normal();
+            let point_z: Vec<f64> = (0..n).map(|_| rng.normal()).collect();
+            let cut = angle + opts.misalign_deg * angle_z;
+            let test = format!("tensile {stem} ({angle}°) repeat {r}");
+            let forces = if cut == angle {
+                if exact.is_none() {
+                    exact = Some(run_strip(angle, &test)?);
+                }
+                exact.clone().unwrap_or_default()
+            } else {
+                run_strip(cut, &test)?
+            };
+            let factor = (1.0 + opts.noise * scale_z).max(0.0);
+            let force: Vec<f64> = forces
+                .iter()
+                .zip(&point_z)
+                .map(|(f, z)| f * factor * (1.0 + 0.1 * opts.noise * z))
+                .collect();
+            progress(&format!(
+                "{test}: cut at {cut:.4}°, force {:.3} N at {:.1} % in {:.2} s (elapsed {:.1} s)",
+                force.last().copied().unwrap_or(0.0),
+                100.0 * opts.max_strain,
+                t0.elapsed().as_secs_f64(),
+                start.elapsed().as_secs_f64()
+            ));
+            tensile.push(TensileTest {
+                angle_deg: angle,
+                width,
+                gauge_length: gauge,
+                curve: PathBuf::from(format!("{stem}-{r}.csv")),
+                elongation: elongations.clone(),
+                force,
+            });
+        }
+    }
+    Ok(tensile)
+}
+
+/// The overhang (m) whose drape angle is 41.5° and that angle, for a cantilever cut at `angle`
+/// with initial membrane stiffness `a` (Pa) along it.
+fn find_overhang(
+    material: &FabricMaterial,
+    angle: f64,
+    a: f64,
+    test: &str,
+    solves: &std::cell::Cell<usize>,
+) -> Result<(f64, f64), SynthError> {
+    let target = DEFAULT_DRAPE_ANGLE_DEG;
+    let tau = material.thickness;
+    let weight = material.areal_density * crate::assembly::STANDARD_GRAVITY;
+    let c = (a * tau.powi(3) / 12.0 / weight).cbrt();
+    let mut guess = 2.0 * c;
+    if !(guess.is_finite() && guess > 0.0) {
+        return Err(SynthError::Bracket(format!(
+            "{test}: no bending length from a = {a} Pa, τ = {tau} m, ρ = {} kg/m²",
+            material.areal_density
+        )));
+    }
+    // the mesh follows the overhang as `CantileverBend::new` chooses it; it is held during a
+    // search (the angle is then smooth in the overhang) and the search repeated if the found
+    // overhang asks for another mesh
+    let mut last = None;
+    for _ in 0..4 {
+        let mesh = CantileverBend::new(BEND_WIDTH, guess, angle).mesh;
+        let found = search(material, angle, mesh, guess, target, test, solves)?;
+        last = Some(found);
+        if CantileverBend::new(BEND_WIDTH, found.0, angle).mesh == mesh {
+            return Ok(found);
+        }
+        guess = found.0;
+    }
+    last.ok_or_else(|| SynthError::Bracket(format!("{test}: no overhang found")))
+}
+
+/// Secant steps in ln(overhang) on a fixed mesh from `guess`, kept inside the bracket once
+/// there is one (bisection when a step leaves it).
+fn search(
+    material: &FabricMaterial,
+    angle: f64,
+    mesh: (usize, usize),
+    guess: f64,
+    target: f64,
+    test: &str,
+    solves: &std::cell::Cell<usize>,
+) -> Result<(f64, f64), SynthError> {
+    let f = |ln_l: f64| -> Result<f64, SynthError> {
+        solves.set(solves.get() + 1);
+        let l = ln_l.exp();
+        let mut bend = CantileverBend::new(BEND_WIDTH, l, angle);
+        bend.mesh = mesh;
+        let r = bend.run(material).map_err(|source| SynthError::Scene {
+            test: format!("{test} at overhang {:.4} mm", l * 1e3),
+            source,
+        })?;
+        Ok(r.drape_angle_deg - target)
+    };
+    // the drape angle grows with the overhang, about 60° per unit of ln(overhang) near 41.5°
+    let (mut x0, mut f0) = (guess.ln(), f(guess.ln())?);
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    let bracket = |x: f64, fx: f64, lo: &mut f64, hi: &mut f64| {
+        if fx < 0.0 {
+            *lo = lo.max(x);
+        } else {
+            *hi = hi.min(x);
+        }
+    };
+    bracket(x0, f0, &mut lo, &mut hi);
+    if f0.abs() <= ANGLE_TOL {
+        return Ok((guess, f0 + target));
+    }
+    let mut x1 = x0 - (f0 / 60.0).clamp(-0.7, 0.7);
+    let mut f1 = f(x1)?;
+    bracket(x1, f1, &mut lo, &mut hi);
+    for _ in 0..60 {
+        if f1.abs() <= ANGLE_TOL {
+            return Ok((x1.exp(), f1 + target));
+        }
+        let mut x2 = if f1 != f0 {
+            x1 - f1 * (x1 - x0) / (f1 - f0)
+        } else {
+            f64::NAN
+        };
+        // without a bracket, go at most a factor 2 at a time; with one, stay inside it
+        if !x2.is_finite() || (x2 - x1).abs() > 0.7 {
+            x2 = x1 - 0.7 * f1.signum();
+        }
+        if lo.is_finite() && hi.is_finite() && !(x2 > lo && x2 < hi) {
+            x2 = 0.5 * (lo + hi);
+        }
+        if lo.is_finite() && hi.is_finite() && hi - lo < 1e-12 {
+            return Ok((x1.exp(), f1 + target));
+        }
+        (x0, f0) = (x1, f1);
+        x1 = x2;
+        f1 = f(x1)?;
+        bracket(x1, f1, &mut lo, &mut hi);
+    }
+    Err(SynthError::Bracket(format!(
+        "{test}: no overhang found whose drape angle is {target}° within {ANGLE_TOL}° (last {:.2} mm: {:.4}°)",
+        x1.exp() * 1e3,
+        f1 + target
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_generator_is_deterministic_and_normal() {
+        let draw = |seed| {
+            let mut r = Rng(seed);
+            (0..20000).map(|_| r.normal()).collect::<Vec<f64>>()
+        };
+        let z = draw(7);
+        assert_eq!(z, draw(7));
+        assert_ne!(z[..10], draw(8)[..10]);
+        let mean = z.iter().sum::<f64>() / z.len() as f64;
+        let var = z.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / z.len() as f64;
+        assert!(
+            mean.abs() < 0.03 && (var - 1.0).abs() < 0.05,
+            "{mean} {var}"
+        );
+        assert!(z.iter().all(|x| x.is_finite()));
+    }
+
+    fn cotton() -> FabricMaterial {
+        crate::material::parse_material(
+            include_str!("../examples/materials/cotton.toml"),
+            "cotton.toml",
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn noise_and_misalignment_are_seeded_and_zero_means_exact() {
+        let m = cotton();
+        let opts = SynthOptions {
+            points: 3,
+            repeats: 2,
+            mesh: (2, 3),
+            ..SynthOptions::default()
+        };
+        let run = |o: &SynthOptions| synth_tensile(&m, o, Instant::now(), &mut |_| {}).unwrap();
+        let exact = run(&opts);
+        assert_eq!(exact.len(), 10);
+        let names: Vec<String> = exact
+            .iter()
+            .map(|t| t.curve.display().to_string())
+            .collect();
+        assert_eq!(
+            names[..4],
+            ["warp-1.csv", "warp-2.csv", "weft-1.csv", "weft-2.csv"]
+        );
+        assert_eq!(
+            names[6..],
+            ["a22.5-1.csv", "a22.5-2.csv", "a67.5-1.csv", "a67.5-2.csv"]
+        );
+        let mut strip = TensileStrip::new(0.05, 0.075, 90.0);
+        strip.mesh = (2, 3);
+        let direct: Vec<f64> = strip
+            .run(&m, &[0.0025, 0.005, 0.0075])
+            .unwrap()
+            .iter()
+            .map(|p| p.force)
+            .collect();
+        assert_eq!(exact[0].force, direct);
+        assert_eq!(exact[1].force, direct);
+        assert_eq!(exact[0].elongation, vec![0.0025, 0.005, 0.0075]);
+        let noisy = SynthOptions {
+            noise: 0.05,
+            misalign_deg: 2.0,
+            seed: 9,
+            ..opts.clone()
+        };
+        let a = run(&noisy);
+        assert_eq!(a, run(&noisy), "same seed, same data");
+        assert_ne!(
+            a,
+            run(&SynthOptions {
+                seed: 10,
+                ..noisy.clone()
+            })
+        );
+        for (t, e) in a.iter().zip(&exact) {
+            assert_eq!(t.angle_deg, e.angle_deg, "the nominal angle is recorded");
+            assert_ne!(t.force, e.force);
+            for (f, g) in t.force.iter().zip(&e.force) {
+                assert!((f / g - 1.0).abs() < 0.5, "{f} {g}");
+            }
+        }
+        assert_ne!(a[0].force, a[1].force, "repeats differ");
+    }
+
+    #[test]
+    fn options_are_checked() {
+        let base = SynthOptions::default();
+        for (opts, want) in [
+            (
+                SynthOptions {
+                    points: 0,
+                    ..base.clone()
+                },
+                "points",
+            ),
+            (
+                SynthOptions {
+                    repeats: 0,
+                    ..base.clone()
+                },
+                "repeats",
+            ),
+            (
+                SynthOptions {
+                    max_strain: 0.0,
+                    ..base.clone()
+                },
+                "max strain",
+            ),
+            (
+                SynthOptions {
+                    max_strain: 1.5,
+                    ..base.clone()
+                },
+                "max strain",
+            ),
+            (
+                SynthOptions {
+                    noise: -0.1,
+                    ..base.clone()
+                },
+                "noise",
+            ),
+            (
+                SynthOptions {
+                    noise: f64::NAN,
+                    ..base.clone()
+                },
+                "noise",
+            ),
+            (
+                SynthOptions {
+                    misalign_deg: f64::INFINITY,
+                    ..base.clone()
+                },
+                "misalignment",
+            ),
+            (
+                SynthOptions {
+                    mesh: (0, 4),
+                    ..base.clone()
+                },
+                "the strip mesh",
+            ),
+        ] {
+            let e = opts.check().unwrap_err().to_string();
+            assert!(e.starts_with(want), "{e}");
+        }
+        assert!(base.check().is_ok());
+    }
+}
