@@ -109,7 +109,7 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Largest engineering strain of the tensile curves.
-        #[arg(long, default_value_t = 0.1)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.1)]
         max_strain: f64,
         /// Points per tensile curve.
         #[arg(long, default_value_t = 20)]
@@ -118,10 +118,10 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         repeats: usize,
         /// Relative force noise: each repeat scaled by 1 + REL·z, each point by 1 + REL/10·z.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         noise: f64,
         /// Standard deviation of each repeat's cut angle, degrees.
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.0)]
         misalign: f64,
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
