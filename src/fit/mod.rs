@@ -21,15 +21,15 @@
 
 pub mod bootstrap;
 pub mod optim;
+pub mod report;
 
-pub mod stub;
+use crate::dataset::{BendTest, FabricDataset, TensileTest};
 use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
 use crate::scene::{BendRig, CantileverBend, SceneError, StripRig, TensileStrip};
 use bootstrap::homogeneous_curve;
 use nalgebra::DMatrix;
 use optim::{minimize, Evaluation, Method, OptimOptions};
 use std::time::Instant;
-use stub::{BendTest, FabricDataset, TensileTest};
 
 /// The fit could not be done.
 #[derive(Debug, thiserror::Error)]
@@ -55,8 +55,14 @@ pub struct FitOptions {
     pub degree_gain: f64,
     /// Mean relative error below which a degree fits (no higher degree is tried).
     pub degree_good: f64,
-    /// Most points per curve used by the fit (evenly spread along the elongation).
+    /// Most points per curve used by the fit (evenly spread along the elongation) on the
+    /// finer levels, and on the first level.
     pub max_points: usize,
+    pub coarse_points: usize,
+    /// A stage stops once its rms relative error is below this, or when an iteration lowers
+    /// the objective by less than `rel_decrease`.
+    pub fit_tol: f64,
+    pub rel_decrease: f64,
     pub max_iterations: usize,
 }
 
@@ -69,7 +75,10 @@ impl Default for FitOptions {
             skip_tol: 2e-3,
             degree_gain: 0.7,
             degree_good: 2e-3,
-            max_points: 20,
+            max_points: 10,
+            coarse_points: 8,
+            fit_tol: 1e-3,
+            rel_decrease: 1e-3,
             max_iterations: 40,
         }
     }
@@ -108,6 +117,8 @@ pub struct FitStats {
 #[derive(Clone, Debug)]
 pub struct FitResult {
     pub material: FabricMaterial,
+    /// the minimiser's name
+    pub method: String,
     pub meshes: Vec<(usize, usize)>,
     pub stats: FitStats,
     /// degree choice, one line per direction and degree tried
@@ -116,6 +127,9 @@ pub struct FitResult {
     pub notes: Vec<String>,
     pub tests: Vec<TestOutcome>,
 }
+
+/// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
+type StrainRange = ([f64; 3], [f64; 3]);
 
 /// Which η and stiffness a stage fits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -381,6 +395,7 @@ impl Fitter<'_> {
             rel_decrease: 1e-10,
             gtol: 0.0,
             target: 0.0,
+            max_step: 2.0,
         };
         let problem = |q: &[f64], jac: bool| -> Result<Evaluation, ()> {
             let mut law = base.clone();
@@ -428,7 +443,13 @@ impl Fitter<'_> {
     }
 
     /// Degree choice and initial guess of one direction from the homogeneous strip.
-    fn bootstrap(&mut self, map: StageMap, test: &TensileTest, points: &[(f64, f64)]) -> Vec<f64> {
+    /// Returns the chosen degree's variables, and every degree's fit (index d − 1) tried.
+    fn bootstrap(
+        &mut self,
+        map: StageMap,
+        test: &TensileTest,
+        points: &[(f64, f64)],
+    ) -> (Vec<f64>, Vec<Vec<f64>>) {
         let (dl, f) = *points.last().expect("a curve with points");
         let lambda = 1.0 + dl / test.gauge_length;
         let e = green(dl, test.gauge_length);
@@ -448,8 +469,9 @@ impl Fitter<'_> {
             }
         }
         let Some(mut chosen) = best else {
-            return StageMap::encode(&map, &self.law);
+            return (StageMap::encode(&map, &self.law), Vec::new());
         };
+        let mut all = vec![chosen.0.clone()];
         let line = format!(
             "{}: degree 1, mean relative error {:.3} % (homogeneous strip)",
             map.dir.name(),
@@ -493,6 +515,7 @@ impl Fitter<'_> {
             );
             self.say(&line);
             self.degree_log.push(line);
+            all.push(candidate.0.clone());
             if candidate.1 <= self.opts.degree_gain * chosen.1 {
                 chosen = candidate;
             } else {
@@ -505,7 +528,7 @@ impl Fitter<'_> {
                 break;
             }
         }
-        chosen.0
+        (chosen.0, all)
     }
 }
 
@@ -569,24 +592,31 @@ impl Fitter<'_> {
         points: &[(f64, f64)],
         level: (usize, usize),
         strain_range: bool,
-    ) -> Result<(f64, Option<([f64; 3], [f64; 3])>), FitError> {
+    ) -> Result<(f64, Option<StrainRange>), FitError> {
         let t0 = Instant::now();
         let elong: Vec<f64> = points.iter().map(|p| p.0).collect();
         let mut rig = self.strip_rig(test, map.dir.angle(), level, &elong)?;
         rig.set_wanted(Some(map.wanted(&self.law)));
         let mut p = map.encode(&self.law);
         let base = self.law.clone();
+        // finer levels start from the last level's fit and only polish it
+        let max_iterations = if level == self.opts.ladder[0] {
+            self.opts.max_iterations
+        } else {
+            self.opts.max_iterations.min(10)
+        };
         let opts = OptimOptions {
             method: self.opts.method,
-            max_iterations: self.opts.max_iterations,
-            rel_decrease: 1e-7,
+            max_iterations,
+            rel_decrease: self.opts.rel_decrease,
             gtol: 1e-12,
-            target: 0.0,
+            target: points.len() as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
         };
         let mut evals = 0;
         let mut newton = 0;
         let tau = self.thickness;
-        let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+        let mut problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
             let mut law = base.clone();
             map.decode(q, &mut law);
             rig.set_material(&law, tau)?;
@@ -599,16 +629,41 @@ impl Fitter<'_> {
             curve_residuals(points, &fitted, jac.then_some(&d[..]), &mut r, &mut j);
             Ok(to_evaluation(r, j, q.len(), jac))
         };
-        let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
+        let fail = |source| FitError::Scene {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
             source,
-        })?;
+        };
+        if level == self.opts.ladder[0] {
+            // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
+            // jaws stop the strip from shearing freely): first fit the stiffness c alone
+            let rest = p[1..].to_vec();
+            let mut scale = vec![p[0]];
+            let one = OptimOptions {
+                method: Method::GaussNewton,
+                max_iterations: 10,
+                rel_decrease: 1e-2,
+                ..opts
+            };
+            minimize(&mut scale, &one, |q: &[f64], jac: bool| {
+                let mut full = vec![q[0]];
+                full.extend(&rest);
+                let e = problem(&full, jac)?;
+                Ok(Evaluation {
+                    residuals: e.residuals,
+                    jacobian: e.jacobian.map(|j| j.columns(0, 1).into_owned()),
+                })
+            })
+            .map_err(fail)?;
+            p[0] = scale[0];
+        }
+        let rep = minimize(&mut p, &opts, problem).map_err(fail)?;
         self.stats.evaluations += evals;
         self.stats.newton_iterations += newton;
         map.decode(&p, &mut self.law);
+        let newton = newton;
         let err = (rep.objective / points.len() as f64).sqrt();
         let msg = format!(
-            "{} stage, degree {}, mesh {}×{}: rms relative error {:.3} % after {} iterations, {} evaluations ({})",
+            "{} stage, degree {}, mesh {}×{}: rms relative error {:.3} % after {} iterations, {} evaluations, {} Newton iterations ({})",
             map.dir.name(),
             StageMap::degree(&p),
             level.0,
@@ -616,6 +671,7 @@ impl Fitter<'_> {
             100.0 * err,
             rep.iterations,
             rep.evaluations,
+            newton,
             rep.stop
         );
         self.say(&msg);
@@ -632,6 +688,95 @@ impl Fitter<'_> {
             None
         };
         self.time_stage(map.dir.name(), t0);
+        Ok((err, range))
+    }
+
+    /// Degree choice on the shell model: each candidate (degree d at index d − 1, from the
+    /// homogeneous bootstrap) refined on the shell; a degree is kept unless the next lowers
+    /// the rms error by the degree gain.
+    #[allow(clippy::type_complexity)]
+    fn shell_degree_ladder(
+        &mut self,
+        map: StageMap,
+        test: &TensileTest,
+        points: &[(f64, f64)],
+        level: (usize, usize),
+        candidates: &[Vec<f64>],
+    ) -> Result<(f64, Option<StrainRange>), FitError> {
+        let base = self.law.clone();
+        let mut best: Option<(f64, Orthotropic, Option<StrainRange>)> = None;
+        for (i, cand) in candidates.iter().enumerate() {
+            let degree = i + 1;
+            self.law = base.clone();
+            match &best {
+                // degree d + 1 starts from the shell's degree-d fit plus a small new term
+                // (μ = 0.1) bending where the homogeneous fit put its last term
+                Some((_, law, _)) if degree > 1 => {
+                    let prev = map.encode(law);
+                    let d = degree - 1;
+                    let mut p = vec![prev[0]];
+                    p.extend(&prev[1..d]);
+                    p.push(0.1);
+                    p.extend(&prev[d..2 * d]);
+                    p.push(cand[2 * degree - 1]);
+                    self.law = law.clone();
+                    map.decode(&p, &mut self.law);
+                }
+                _ => map.decode(cand, &mut self.law),
+            }
+            let (err, range) = match self.shell_stage(map, test, points, level, true) {
+                Ok(r) => r,
+                Err(e) if best.is_some() => {
+                    // this degree's start is not solvable (a law that softens to instability
+                    // inside the tested strains): keep the last degree
+                    let line = format!(
+                        "{}: degree {degree} failed on the shell ({e}); degree {} kept",
+                        map.dir.name(),
+                        degree - 1
+                    );
+                    self.say(&line);
+                    self.degree_log.push(line);
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            let line = format!(
+                "{}: degree {degree}, rms relative error {:.3} % (shell, {}×{})",
+                map.dir.name(),
+                100.0 * err,
+                level.0,
+                level.1
+            );
+            self.degree_log.push(line);
+            let better = match &best {
+                None => true,
+                Some(b) => err <= self.opts.degree_gain * b.0,
+            };
+            if better {
+                best = Some((err, self.law.clone(), range));
+            } else {
+                let line = format!(
+                    "{}: degree {} kept: degree {degree} lowers the error by less than {:.0} %",
+                    map.dir.name(),
+                    degree - 1,
+                    100.0 * (1.0 - self.opts.degree_gain)
+                );
+                self.say(&line);
+                self.degree_log.push(line);
+                break;
+            }
+            if err <= self.opts.degree_good {
+                let line = format!(
+                    "{}: degree {degree} kept: error below {:.2} %",
+                    map.dir.name(),
+                    100.0 * self.opts.degree_good
+                );
+                self.degree_log.push(line);
+                break;
+            }
+        }
+        let (err, law, range) = best.expect("one candidate at least");
+        self.law = law;
         Ok((err, range))
     }
 
@@ -667,9 +812,10 @@ impl Fitter<'_> {
         let opts = OptimOptions {
             method: self.opts.method,
             max_iterations: self.opts.max_iterations,
-            rel_decrease: 1e-9,
+            rel_decrease: self.opts.rel_decrease,
             gtol: 1e-14,
-            target: 0.0,
+            target: bends.len() as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
         };
         let mut evals = 0;
         let mut newton = 0;
@@ -888,10 +1034,11 @@ pub fn fit(
     ];
     // 1. bootstrap: degrees and initial guesses from the homogeneous strip
     let t0 = Instant::now();
+    let mut bias_candidates: Vec<Vec<f64>> = Vec::new();
     f.say("bootstrap on the homogeneous-strain strip");
     for (k, (t, p)) in [(&warp, &wp), (&weft, &fp)].into_iter().enumerate() {
         if let (Some(t), Some(p)) = (t, p) {
-            let q = f.bootstrap(maps[k], t, p);
+            let (q, _) = f.bootstrap(maps[k], t, p);
             let mut law = f.law.clone();
             maps[k].decode(&q, &mut law);
             f.law = law;
@@ -914,10 +1061,11 @@ pub fn fit(
     }
     f.law.a12 = 0.5 * f.law.a11.min(f.law.a22);
     if let (Some(t), Some(p)) = (&bias, &bp) {
-        let q = f.bootstrap(maps[2], t, p);
+        let (q, all) = f.bootstrap(maps[2], t, p);
         let mut law = f.law.clone();
         maps[2].decode(&q, &mut law);
         f.law = law;
+        bias_candidates = all;
     } else {
         f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
         f.notes.push(format!(
@@ -931,12 +1079,21 @@ pub fn fit(
     let mut previous: Option<Vec<f64>> = None;
     for (li, &level) in opts.ladder.iter().enumerate() {
         meshes.push(level);
-        for (k, (t, p)) in [(&warp, &wp), (&weft, &fp), (&bias, &bp)]
-            .into_iter()
-            .enumerate()
-        {
-            let (Some(t), Some(p)) = (t, p) else { continue };
-            let (_, range) = f.shell_stage(maps[k], t, p, level, li == 0)?;
+        let n = if li == 0 {
+            opts.coarse_points
+        } else {
+            opts.max_points
+        };
+        for (k, t) in [&warp, &weft, &bias].into_iter().enumerate() {
+            let Some(t) = t else { continue };
+            let p = &fit_points(t, n);
+            let (_, range) = if k == 2 && li == 0 && bias_candidates.len() > 1 {
+                // the homogeneous strip models a clamped bias strip poorly: choose the shear
+                // degree on the shell model itself
+                f.shell_degree_ladder(maps[2], t, p, level, &bias_candidates)?
+            } else {
+                f.shell_stage(maps[k], t, p, level, li == 0)?
+            };
             // 3 and 5. cut-offs at 95 % of the largest strain the test exercised (over the
             // strip's Gauss points at the largest elongation), set once on the first mesh
             if let Some((lo, hi)) = range {
@@ -964,10 +1121,9 @@ pub fn fit(
         }
         // 6. is the next level worth it? compare this level's forces with the last level's
         let mut now = Vec::new();
-        for (t, p) in [(&warp, &wp), (&weft, &fp), (&bias, &bp)] {
-            if let (Some(t), Some(p)) = (t, p) {
-                now.extend(f.predict(t, t.angle_deg, p, level)?);
-            }
+        for t in [&warp, &weft, &bias].into_iter().flatten() {
+            let p = &fit_points(t, opts.coarse_points);
+            now.extend(f.predict(t, t.angle_deg, p, level)?);
         }
         if let Some(prev) = &previous {
             let change = prev
@@ -1059,6 +1215,7 @@ pub fn fit(
     let material = f.material();
     Ok(FitResult {
         material,
+        method: format!("{:?}", opts.method).to_lowercase(),
         meshes,
         stats: f.stats,
         degree_log: f.degree_log,

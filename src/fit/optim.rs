@@ -33,8 +33,13 @@ impl Evaluation {
 /// Which minimiser.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
-    #[default]
+    /// BFGS on the inverse Hessian, started from the Gauss–Newton matrix.
     Bfgs,
+    /// Fletcher & Xu (1987): the Gauss–Newton matrix while it makes fast progress (ε falls by
+    /// at least a fifth per step), BFGS updates of it once the residuals' own curvature or a
+    /// near-singular Jacobian slows Gauss–Newton down; strong-Wolfe steps throughout.
+    #[default]
+    Hybrid,
     GaussNewton,
 }
 
@@ -43,8 +48,11 @@ impl std::str::FromStr for Method {
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
             "bfgs" => Ok(Self::Bfgs),
+            "hybrid" => Ok(Self::Hybrid),
             "gauss-newton" | "gn" => Ok(Self::GaussNewton),
-            _ => Err(format!("unknown method {s:?} (bfgs or gauss-newton)")),
+            _ => Err(format!(
+                "unknown method {s:?} (hybrid, bfgs or gauss-newton)"
+            )),
         }
     }
 }
@@ -59,6 +67,8 @@ pub struct OptimOptions {
     pub gtol: f64,
     /// stop when ε falls below this
     pub target: f64,
+    /// longest step tried, in the ∞-norm of the variables (a trust bound on wild trials)
+    pub max_step: f64,
 }
 
 impl Default for OptimOptions {
@@ -69,6 +79,7 @@ impl Default for OptimOptions {
             rel_decrease: 1e-6,
             gtol: 1e-12,
             target: 0.0,
+            max_step: f64::INFINITY,
         }
     }
 }
@@ -87,7 +98,7 @@ pub struct OptimReport {
 
 /// Minimises Σ r(p)² from `p`, which is left at the best point found.
 pub fn minimize<E>(
-    p: &mut Vec<f64>,
+    p: &mut [f64],
     opts: &OptimOptions,
     mut problem: impl FnMut(&[f64], bool) -> Result<Evaluation, E>,
 ) -> Result<OptimReport, E> {
@@ -102,6 +113,7 @@ pub fn minimize<E>(
     };
     match opts.method {
         Method::Bfgs => bfgs(p, first, opts, &mut report, &mut eval),
+        Method::Hybrid => hybrid(p, first, opts, &mut report, &mut eval),
         Method::GaussNewton => gauss_newton(p, first, opts, &mut report, &mut eval),
     }
     Ok(report)
@@ -110,7 +122,7 @@ pub fn minimize<E>(
 type Eval<'a> = dyn FnMut(&[f64], bool, &mut OptimReport) -> Option<Evaluation> + 'a;
 
 fn bfgs(
-    p: &mut Vec<f64>,
+    p: &mut [f64],
     first: Evaluation,
     opts: &OptimOptions,
     report: &mut OptimReport,
@@ -151,10 +163,18 @@ fn bfgs(
                 d *= (0.1 * f / slope).min(1.0 / d.amax().max(1e-300));
             }
         }
-        let Some((alpha, fa, ga)) = strong_wolfe(&x, f, &g, &d, report, eval) else {
+        cap(&mut d, opts.max_step);
+        let Some((alpha, fa, ga, _)) = strong_wolfe(&x, f, &g, &d, report, eval) else {
             report.stop = "line search failed".into();
             break;
         };
+        if std::env::var_os("KS_DEBUG_OPT").is_some() {
+            eprintln!(
+                "bfgs it {it}: f {f:.6e} -> {fa:.6e}, alpha {alpha:.3e}, |d| {:.3e}, evals {}",
+                d.amax(),
+                report.evaluations
+            );
+        }
         let s = alpha * &d;
         let y = &ga - &g;
         let sy = s.dot(&y);
@@ -187,6 +207,95 @@ fn bfgs(
     report.objective = f;
 }
 
+/// Shortens d to ∞-norm `max_step` if it is longer.
+fn cap(d: &mut DVector<f64>, max_step: f64) {
+    let m = d.amax();
+    if m > max_step {
+        *d *= max_step / m;
+    }
+}
+
+/// 2 JᵀJ + δI with δ = 1e-10 of the mean diagonal.
+fn gauss_newton_matrix(j: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = j.ncols();
+    let mut a = 2.0 * j.transpose() * j;
+    let shift = (1e-10 * a.trace() / n as f64).max(1e-300);
+    for i in 0..n {
+        a[(i, i)] += shift;
+    }
+    a
+}
+
+/// The Fletcher–Xu hybrid on the Hessian estimate B (see [`Method::Hybrid`]).
+fn hybrid(
+    p: &mut [f64],
+    first: Evaluation,
+    opts: &OptimOptions,
+    report: &mut OptimReport,
+    eval: &mut Eval,
+) {
+    let n = p.len();
+    let mut x = DVector::from_column_slice(p);
+    let mut f = first.objective();
+    let mut g = first.gradient();
+    let mut b = gauss_newton_matrix(first.jacobian.as_ref().expect("Jacobian"));
+    report.stop = "iteration limit".into();
+    for it in 0..opts.max_iterations {
+        report.iterations = it;
+        if f <= opts.target {
+            report.stop = "objective below target".into();
+            break;
+        }
+        if g.amax() <= opts.gtol {
+            report.stop = "gradient below tolerance".into();
+            break;
+        }
+        let mut d = match b.clone().cholesky() {
+            Some(c) => c.solve(&(-&g)),
+            None => {
+                b = DMatrix::identity(n, n) * b.diagonal().amax().max(1.0);
+                -&g / b[(0, 0)]
+            }
+        };
+        cap(&mut d, opts.max_step);
+        let Some((alpha, fa, ga, ja)) = strong_wolfe(&x, f, &g, &d, report, eval) else {
+            report.stop = "line search failed".into();
+            break;
+        };
+        if std::env::var_os("KS_DEBUG_OPT").is_some() {
+            eprintln!(
+                "hybrid it {it}: f {f:.6e} -> {fa:.6e}, alpha {alpha:.3e}, |d| {:.3e}, evals {}",
+                d.amax(),
+                report.evaluations
+            );
+        }
+        let s = alpha * &d;
+        let y = &ga - &g;
+        x += &s;
+        let decrease = (f - fa) / f.max(1e-300);
+        f = fa;
+        g = ga;
+        let sy = s.dot(&y);
+        if decrease >= 0.2 {
+            if let Some(j) = &ja {
+                b = gauss_newton_matrix(j);
+            }
+        } else if sy > 1e-12 * s.norm() * y.norm() {
+            let bs = &b * &s;
+            b += (&y * y.transpose()) / sy - (&bs * bs.transpose()) / s.dot(&bs);
+        } else {
+            report.skipped_updates += 1;
+        }
+        report.iterations = it + 1;
+        if decrease < opts.rel_decrease {
+            report.stop = "relative decrease below tolerance".into();
+            break;
+        }
+    }
+    p.copy_from_slice(x.as_slice());
+    report.objective = f;
+}
+
 /// (2 JᵀJ + δI)⁻¹ with δ = 1e-10 of the mean diagonal, if that is positive definite.
 fn gauss_newton_inverse(e: &Evaluation) -> Option<DMatrix<f64>> {
     let j = e.jacobian.as_ref()?;
@@ -203,7 +312,9 @@ fn gauss_newton_inverse(e: &Evaluation) -> Option<DMatrix<f64>> {
 }
 
 /// A trial point of the line search: α, ε, ∇ε and the slope ∇ε·d.
-type Trial = (f64, f64, DVector<f64>, f64);
+type Trial = (f64, f64, DVector<f64>, f64, Option<DMatrix<f64>>);
+/// An accepted step: α, ε, ∇ε and the Jacobian there.
+type Step = (f64, f64, DVector<f64>, Option<DMatrix<f64>>);
 
 /// Strong-Wolfe step along `d` (c₁ = 1e-4, c₂ = 0.9): (α, ε, ∇ε) at the accepted point.
 fn strong_wolfe(
@@ -213,7 +324,7 @@ fn strong_wolfe(
     d: &DVector<f64>,
     report: &mut OptimReport,
     eval: &mut Eval,
-) -> Option<(f64, f64, DVector<f64>)> {
+) -> Option<Step> {
     let slope0 = g0.dot(d);
     if slope0 >= 0.0 {
         return None;
@@ -223,9 +334,9 @@ fn strong_wolfe(
         let e = eval(xa.as_slice(), true, report)?;
         let g = e.gradient();
         let slope = g.dot(d);
-        Some((a, e.objective(), g, slope))
+        Some((a, e.objective(), g, slope, e.jacobian))
     };
-    let mut prev: Trial = (0.0, f0, g0.clone(), slope0);
+    let mut prev: Trial = (0.0, f0, g0.clone(), slope0, None);
     let mut a = 1.0;
     for i in 0..20 {
         let Some(t) = phi(a, report) else {
@@ -236,7 +347,7 @@ fn strong_wolfe(
             return zoom(prev, Some(t.clone()), a, f0, slope0, &mut phi, report);
         }
         if t.3.abs() <= -C2 * slope0 {
-            return Some((t.0, t.1, t.2));
+            return Some((t.0, t.1, t.2, t.4));
         }
         if t.3 >= 0.0 {
             return zoom(
@@ -248,12 +359,12 @@ fn strong_wolfe(
                 &mut phi,
                 report,
             )
-            .or(Some((t.0, t.1, t.2)));
+            .or(Some((t.0, t.1, t.2, t.4)));
         }
         prev = t;
         a *= 2.0;
     }
-    Some((prev.0, prev.1, prev.2)).filter(|t| t.0 > 0.0)
+    Some((prev.0, prev.1, prev.2, prev.4)).filter(|t| t.0 > 0.0)
 }
 
 const C1: f64 = 1e-4;
@@ -269,7 +380,7 @@ fn zoom(
     slope0: f64,
     phi: &mut impl FnMut(f64, &mut OptimReport) -> Option<Trial>,
     report: &mut OptimReport,
-) -> Option<(f64, f64, DVector<f64>)> {
+) -> Option<Step> {
     for _ in 0..30 {
         let (l, h) = (lo.0.min(a_hi), lo.0.max(a_hi));
         let width = h - l;
@@ -293,7 +404,7 @@ fn zoom(
             hi = Some(t);
         } else {
             if t.3.abs() <= -C2 * slope0 {
-                return Some((t.0, t.1, t.2));
+                return Some((t.0, t.1, t.2, t.4));
             }
             if t.3 * (a_hi - lo.0) >= 0.0 {
                 a_hi = lo.0;
@@ -303,7 +414,7 @@ fn zoom(
         }
     }
     // no point met the curvature condition: take the best with sufficient decrease
-    (lo.0 > 0.0).then_some((lo.0, lo.1, lo.2))
+    (lo.0 > 0.0).then_some((lo.0, lo.1, lo.2, lo.4))
 }
 
 /// Minimiser of the cubic through (a, fa, sa) and (b, fb, sb), if it exists.
@@ -322,7 +433,7 @@ fn cubic_min(a: f64, fa: f64, sa: f64, b: f64, fb: f64, sb: f64) -> Option<f64> 
 }
 
 fn gauss_newton(
-    p: &mut Vec<f64>,
+    p: &mut [f64],
     first: Evaluation,
     opts: &OptimOptions,
     report: &mut OptimReport,
@@ -356,7 +467,8 @@ fn gauss_newton(
             report.stop = "singular Gauss–Newton system".into();
             break;
         };
-        let d = chol.solve(&(-(j.transpose() * &r)));
+        let mut d = chol.solve(&(-(j.transpose() * &r)));
+        cap(&mut d, opts.max_step);
         let slope = g.dot(&d);
         let mut alpha = 1.0;
         let mut accepted = None;
@@ -404,7 +516,7 @@ mod tests {
 
     #[test]
     fn bfgs_and_gauss_newton_find_the_rosenbrock_minimum() {
-        for method in [Method::Bfgs, Method::GaussNewton] {
+        for method in [Method::Bfgs, Method::Hybrid, Method::GaussNewton] {
             let mut p = vec![-1.2, 1.0];
             let opts = OptimOptions {
                 method,
@@ -412,6 +524,7 @@ mod tests {
                 rel_decrease: 0.0,
                 gtol: 1e-10,
                 target: 1e-20,
+                max_step: f64::INFINITY,
             };
             let r = minimize(&mut p, &opts, rosenbrock).unwrap();
             assert!(
@@ -437,7 +550,7 @@ mod tests {
             let d = -scale * &g0;
             let mut report = OptimReport::default();
             let mut eval = |q: &[f64], j: bool, _: &mut OptimReport| f(q, j).ok();
-            let (a, fa, ga) = strong_wolfe(&x, f0, &g0, &d, &mut report, &mut eval).unwrap();
+            let (a, fa, ga, _) = strong_wolfe(&x, f0, &g0, &d, &mut report, &mut eval).unwrap();
             assert!(fa <= f0 + C1 * a * g0.dot(&d), "scale {scale}");
             assert!(ga.dot(&d).abs() <= C2 * g0.dot(&d).abs(), "scale {scale}");
         }

@@ -353,6 +353,10 @@ impl TensileStrip {
     }
 }
 
+/// The parameters (law, then thickness) of an equilibrium and ∂q/∂k there, one row per
+/// parameter.
+type ParameterTangent = (Vec<f64>, Vec<Vec<f64>>);
+
 /// A tensile strip ready to be run again and again: model, constraints and the last
 /// equilibrium at every elongation, which warm-starts the next run.
 pub struct StripRig {
@@ -370,7 +374,7 @@ pub struct StripRig {
     equilibria: Vec<Option<Vec<Vec3>>>,
     /// per point: the parameters (law, then thickness) of its equilibrium and ∂q/∂k there,
     /// which predict the equilibrium for new parameters (q + ∂q/∂k Δk)
-    tangents: Vec<Option<(Vec<f64>, Vec<Vec<f64>>)>>,
+    tangents: Vec<Option<ParameterTangent>>,
     params: Vec<f64>,
     /// which parameters' sensitivities to compute (all when `None`; the others come back 0)
     wanted: Option<Vec<bool>>,

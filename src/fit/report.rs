@@ -1,0 +1,215 @@
+//! What `ks-fit fit` hands back: the fitted material file with its `[fit]` table (meshes,
+//! time, evaluations and one `[[fit.test]]` per test, in the terms of the paper's Tables 3–5),
+//! the same table as text, and per-test CSV and SVG plots in the style of the paper's Figure 2
+//! (measured dashed, fitted solid; full range and small-strain close-up).
+
+use super::{FitResult, TestOutcome};
+use crate::material::material_toml;
+use std::fmt::Write;
+
+fn toml_str(s: &str) -> String {
+    format!("{s:?}")
+}
+
+/// The material file followed by the `[fit]` table; loadable by every command that reads
+/// materials (the loader reads past `[fit]`).
+pub fn fit_toml(r: &FitResult, source: &str) -> String {
+    let mut s = format!("# fitted by ks-fit fit from {source}\n");
+    s += &material_toml(&r.material);
+    let _ = writeln!(s, "\n[fit]");
+    let _ = writeln!(s, "dataset = {}", toml_str(source));
+    let meshes: Vec<String> = r
+        .meshes
+        .iter()
+        .map(|m| toml_str(&format!("{}x{}", m.0, m.1)))
+        .collect();
+    let _ = writeln!(s, "meshes = [{}]", meshes.join(", "));
+    let _ = writeln!(s, "method = {}", toml_str(&r.method));
+    let _ = writeln!(s, "wall_seconds = {:.3}", r.stats.seconds);
+    let _ = writeln!(s, "objective_evaluations = {}", r.stats.evaluations);
+    let _ = writeln!(s, "newton_iterations = {}", r.stats.newton_iterations);
+    let _ = writeln!(
+        s,
+        "degrees = {{ warp = {}, weft = {}, shear = {} }}",
+        r.material.law.warp.degree(),
+        r.material.law.weft.degree(),
+        r.material.law.shear.degree()
+    );
+    let notes: Vec<String> = r.notes.iter().map(|n| toml_str(n)).collect();
+    let _ = writeln!(s, "notes = [{}]", notes.join(", "));
+    let log: Vec<String> = r.degree_log.iter().map(|n| toml_str(n)).collect();
+    let _ = writeln!(s, "degree_choice = [{}]", log.join(", "));
+    let _ = writeln!(s, "\n[fit.stage_seconds]");
+    for (stage, t) in &r.stats.stage_seconds {
+        let _ = writeln!(s, "{} = {t:.3}", toml_str(stage));
+    }
+    for t in &r.tests {
+        let _ = writeln!(s, "\n[[fit.test]]");
+        let _ = writeln!(s, "kind = {}", toml_str(t.kind));
+        let _ = writeln!(s, "angle_deg = {:?}", t.angle_deg);
+        if let Some(c) = &t.curve {
+            let _ = writeln!(s, "curve = {}", toml_str(c));
+        }
+        if let Some(e) = t.avg_rel_error {
+            let _ = writeln!(s, "avg_rel_error = {e:.6}");
+        }
+        if let Some(a) = t.drape_angle_deg {
+            let _ = writeln!(s, "drape_angle_deg = {a:.4}");
+        }
+        if let Some(a) = t.target_drape_deg {
+            let _ = writeln!(s, "target_drape_angle_deg = {a:.4}");
+        }
+        if let Some(m) = t.misalign_deg {
+            let _ = writeln!(s, "misalign_deg = {m:.3}");
+        }
+        let _ = writeln!(s, "used_in_fit = {}", t.used_in_fit);
+    }
+    s
+}
+
+/// The per-test table printed at the end of a fit.
+pub fn table(r: &FitResult) -> String {
+    let mut s = format!(
+        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13}\n",
+        "kind", "angle", "curve", "avg_rel_error", "drape_angle_deg", "misalign_deg"
+    );
+    for t in &r.tests {
+        let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
+        let _ = writeln!(
+            s,
+            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13}",
+            t.kind,
+            t.angle_deg,
+            t.curve.as_deref().unwrap_or("-"),
+            opt(t.avg_rel_error, &|e| format!("{:.2} %", 100.0 * e)),
+            match (t.drape_angle_deg, t.target_drape_deg) {
+                (Some(a), Some(g)) => format!("{a:.2} ({g:.1})"),
+                _ => "-".into(),
+            },
+            opt(t.misalign_deg, &|m| format!("{m:+.2}")),
+        );
+    }
+    s
+}
+
+/// File-name stem of a test's report files.
+fn stem(t: &TestOutcome, i: usize) -> String {
+    let base = t
+        .curve
+        .as_deref()
+        .and_then(|c| std::path::Path::new(c).file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| format!("test{i}"));
+    format!("{}-{base}", t.kind)
+}
+
+/// CSV of measured against fitted force (`elongation_mm,measured_n,fitted_n,rel_error`).
+pub fn curve_csv(t: &TestOutcome) -> String {
+    let mut s = String::from("elongation_mm,measured_n,fitted_n,rel_error\n");
+    for &(e, m, f) in &t.points {
+        let _ = writeln!(s, "{},{},{},{}", e * 1e3, m, f, (f - m) / m);
+    }
+    s
+}
+
+/// SVG: measured (dashed) and fitted (solid) force against elongation, the full range on the
+/// left and the first quarter of the elongation on the right.
+pub fn curve_svg(t: &TestOutcome, title: &str) -> Result<String, String> {
+    use plotters::prelude::*;
+    if t.points.len() < 2 {
+        return Err("a curve needs two points to plot".into());
+    }
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, (960, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let root = root
+            .titled(title, ("sans-serif", 18))
+            .map_err(|e| e.to_string())?;
+        let (left, right) = root.split_horizontally(480);
+        let emax = t.points.iter().map(|p| p.0 * 1e3).fold(0.0, f64::max);
+        for (area, xmax) in [(&left, emax), (&right, 0.25 * emax)] {
+            let inside: Vec<&(f64, f64, f64)> = t
+                .points
+                .iter()
+                .filter(|p| p.0 * 1e3 <= xmax * 1.0001)
+                .collect();
+            let fmax = inside
+                .iter()
+                .map(|p| p.1.max(p.2))
+                .fold(0.0, f64::max)
+                .max(1e-12);
+            let mut chart = ChartBuilder::on(area)
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(60)
+                .build_cartesian_2d(0.0..xmax, 0.0..1.05 * fmax)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc("elongation (mm)")
+                .y_desc("force (N)")
+                .draw()
+                .map_err(|e| e.to_string())?;
+            let measured: Vec<(f64, f64)> = inside.iter().map(|p| (p.0 * 1e3, p.1)).collect();
+            let fitted: Vec<(f64, f64)> = inside.iter().map(|p| (p.0 * 1e3, p.2)).collect();
+            chart
+                .draw_series(DashedLineSeries::new(
+                    measured.clone(),
+                    6,
+                    4,
+                    ShapeStyle::from(&BLACK).stroke_width(2),
+                ))
+                .map_err(|e| e.to_string())?
+                .label("measured")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+            chart
+                .draw_series(LineSeries::new(
+                    fitted,
+                    ShapeStyle::from(&BLUE).stroke_width(2),
+                ))
+                .map_err(|e| e.to_string())?
+                .label("fitted")
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+            chart
+                .configure_series_labels()
+                .border_style(BLACK)
+                .background_style(WHITE)
+                .draw()
+                .map_err(|e| e.to_string())?;
+        }
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(buf)
+}
+
+/// Writes `DIR/<kind>-<curve>.csv` and `.svg` for every tensile and validation test, and
+/// `DIR/summary.txt` with the table. Returns the files written.
+pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec<String>> {
+    std::fs::create_dir_all(dir)?;
+    let mut written = Vec::new();
+    for (i, t) in r.tests.iter().enumerate() {
+        if t.points.is_empty() {
+            continue;
+        }
+        let stem = stem(t, i);
+        let csv = dir.join(format!("{stem}.csv"));
+        std::fs::write(&csv, curve_csv(t))?;
+        written.push(csv.display().to_string());
+        let title = format!(
+            "{} {}°: mean |relative error| {:.2} %",
+            t.kind,
+            t.angle_deg,
+            100.0 * t.avg_rel_error.unwrap_or(f64::NAN)
+        );
+        if let Ok(svg) = curve_svg(t, &title) {
+            let path = dir.join(format!("{stem}.svg"));
+            std::fs::write(&path, svg)?;
+            written.push(path.display().to_string());
+        }
+    }
+    let summary = dir.join("summary.txt");
+    std::fs::write(&summary, table(r))?;
+    written.push(summary.display().to_string());
+    Ok(written)
+}
