@@ -108,7 +108,10 @@ pub struct TestOutcome {
 #[derive(Clone, Debug, Default)]
 pub struct FitStats {
     pub seconds: f64,
+    /// shell-model evaluations (every run of a strip or cantilever)
     pub evaluations: usize,
+    /// homogeneous-strip evaluations of the bootstrap (each a few microseconds)
+    pub bootstrap_evaluations: usize,
     pub newton_iterations: usize,
     /// (stage, seconds)
     pub stage_seconds: Vec<(String, f64)>,
@@ -350,7 +353,14 @@ struct Fitter<'a> {
     thickness: f64,
     degree_log: Vec<String>,
     notes: Vec<String>,
+    /// drape angles of the bend tests at the last thickness stage's result
+    bend_angles: Vec<f64>,
+    /// strips already set up, warm
+    rigs: std::collections::HashMap<RigKey, StripRig>,
 }
+
+/// (curve, angle bits, mesh level, elongation bits) of a cached strip.
+type RigKey = (String, u64, (usize, usize), Vec<u64>);
 
 impl Fitter<'_> {
     fn say(&mut self, msg: &str) {
@@ -420,7 +430,7 @@ impl Fitter<'_> {
             Ok(to_evaluation(r, j, q.len(), jac))
         };
         let rep = minimize(&mut p, &opts, problem).ok()?;
-        self.stats.evaluations += rep.evaluations;
+        self.stats.bootstrap_evaluations += rep.evaluations;
         let mut law = base;
         map.decode(&p, &mut law);
         let curve = homogeneous_curve(
@@ -550,7 +560,33 @@ fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize) {
 }
 
 impl Fitter<'_> {
+    /// The rig of a test at an angle, mesh level and set of elongations: taken from the cache
+    /// (warm, with its last equilibria) or set up; hand it back with [`Fitter::keep_rig`].
     fn strip_rig(
+        &mut self,
+        test: &TensileTest,
+        angle: f64,
+        level: (usize, usize),
+        elong: &[f64],
+    ) -> Result<(RigKey, StripRig), FitError> {
+        let key = (
+            test.curve.display().to_string(),
+            angle.to_bits(),
+            level,
+            elong.iter().map(|e| e.to_bits()).collect::<Vec<u64>>(),
+        );
+        if let Some(rig) = self.rigs.remove(&key) {
+            return Ok((key, rig));
+        }
+        self.new_rig(test, angle, level, elong).map(|r| (key, r))
+    }
+
+    fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {
+        rig.set_wanted(None);
+        self.rigs.insert(key, rig);
+    }
+
+    fn new_rig(
         &self,
         test: &TensileTest,
         angle: f64,
@@ -595,20 +631,23 @@ impl Fitter<'_> {
     ) -> Result<(f64, Option<StrainRange>), FitError> {
         let t0 = Instant::now();
         let elong: Vec<f64> = points.iter().map(|p| p.0).collect();
-        let mut rig = self.strip_rig(test, map.dir.angle(), level, &elong)?;
+        let (key, mut rig) = self.strip_rig(test, map.dir.angle(), level, &elong)?;
         rig.set_wanted(Some(map.wanted(&self.law)));
         let mut p = map.encode(&self.law);
         let base = self.law.clone();
         // finer levels start from the last level's fit and only polish it
-        let max_iterations = if level == self.opts.ladder[0] {
-            self.opts.max_iterations
+        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
+            (self.opts.max_iterations, self.opts.rel_decrease)
         } else {
-            self.opts.max_iterations.min(10)
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
         };
         let opts = OptimOptions {
             method: self.opts.method,
             max_iterations,
-            rel_decrease: self.opts.rel_decrease,
+            rel_decrease,
             gtol: 1e-12,
             target: points.len() as f64 * self.opts.fit_tol.powi(2),
             max_step: 0.5,
@@ -687,6 +726,7 @@ impl Fitter<'_> {
         } else {
             None
         };
+        self.keep_rig(key, rig);
         self.time_stage(map.dir.name(), t0);
         Ok((err, range))
     }
@@ -848,6 +888,18 @@ impl Fitter<'_> {
         self.stats.evaluations += evals;
         self.stats.newton_iterations += newton;
         let (law, tau) = scaled(&p);
+        // the drape angles at the accepted thickness (warm: a Newton step or two)
+        self.bend_angles.clear();
+        for rig in &mut rigs {
+            rig.set_material(&law, tau)
+                .and_then(|_| rig.run(false))
+                .map(|pt| self.bend_angles.push(pt.drape_angle_deg))
+                .map_err(|source| FitError::Scene {
+                    stage: "drape angles at the fitted thickness".into(),
+                    source,
+                })?;
+            self.stats.evaluations += 1;
+        }
         self.law = law;
         self.thickness = tau;
         let msg = format!(
@@ -873,17 +925,20 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<Vec<f64>, FitError> {
         let elong: Vec<f64> = points.iter().map(|p| p.0).collect();
-        let mut rig = self.strip_rig(test, angle, level, &elong)?;
+        let (key, mut rig) = self.strip_rig(test, angle, level, &elong)?;
         let law = self.law.clone();
-        self.run_strip(&mut rig, &law, false)
+        let out = self
+            .run_strip(&mut rig, &law, false)
             .map(|r| r.0)
             .map_err(|source| FitError::Scene {
                 stage: format!("predicting the {angle}° strip"),
                 source,
-            })
+            });
+        self.keep_rig(key, rig);
+        out
     }
 
-    /// The alignment error Δθ ∈ [−10°, 10°] that best explains a validation run (golden-section
+    /// The alignment error Δθ ∈ [−5°, 5°] that best explains a validation run (golden-section
     /// search on the mean squared relative error).
     fn misalignment(
         &mut self,
@@ -902,11 +957,11 @@ impl Fitter<'_> {
             }
         };
         let g = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut a, mut b) = (-10.0, 10.0);
+        let (mut a, mut b) = (-5.0, 5.0);
         let mut c = b - g * (b - a);
         let mut d = a + g * (b - a);
         let (mut fc, mut fd) = (cost(self, c), cost(self, d));
-        while b - a > 0.05 {
+        while b - a > 0.1 {
             if fc < fd {
                 b = d;
                 d = c;
@@ -1002,6 +1057,8 @@ pub fn fit(
         thickness: data.thickness,
         degree_log: Vec::new(),
         notes,
+        bend_angles: Vec::new(),
+        rigs: Default::default(),
     };
     let pts = |t: &Option<TensileTest>| t.as_ref().map(|t| fit_points(t, opts.max_points));
     let (wp, fp, bp) = (pts(&warp), pts(&weft), pts(&bias));
@@ -1191,19 +1248,13 @@ pub fn fit(
             used_in_fit: used,
         });
     }
-    for b in &data.bend {
-        let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-        bend.mesh = bend_mesh(last, b);
-        let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
-            stage: format!("the {}° cantilever", b.angle_deg),
-            source,
-        })?;
+    for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
         tests.push(TestOutcome {
             kind: "bend",
             angle_deg: b.angle_deg,
             curve: None,
             avg_rel_error: None,
-            drape_angle_deg: Some(r.drape_angle_deg),
+            drape_angle_deg: Some(angle),
             target_drape_deg: Some(b.drape_angle_deg),
             misalign_deg: None,
             points: Vec::new(),

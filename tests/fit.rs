@@ -1,0 +1,170 @@
+//! `ks-fit fit` end to end: a noise-free synthetic dataset from a degree-2 material is fitted
+//! back (every curve within 0.5 % on average, both drape angles within 0.2° of 41.5°: the
+//! issue's acceptance numbers), the output loads as a material and carries its `[fit]` table,
+//! and datasets the fit cannot use are refused with exit code 2.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn ks_fit(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run ks-fit");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn folder(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("kshell-fit-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A degree-2 material (warp and weft stiffen, shear stiffens strongly), no cut-offs.
+const DEGREE2: &str = "name = \"degree-2\"
+areal_density_g_m2 = 103.6
+thickness_mm = 0.18
+a11_pa = 2.0e8
+a22_pa = 1.2e8
+g12_pa = 4.0e6
+[warp]
+mu = [0.6, 0.4]
+alpha = [1.0, 150.0]
+[weft]
+mu = [0.8, 0.2]
+alpha = [1.0, 100.0]
+[shear]
+mu = [0.7, 0.3]
+alpha = [1.0, 300.0]
+";
+
+#[test]
+fn noise_free_degree2_data_are_fitted_back() {
+    let dir = folder("degree2");
+    let material = dir.join("degree2.toml");
+    std::fs::write(&material, DEGREE2).unwrap();
+    let data = dir.join("data");
+    // the virtual lab on the fit's own mesh, so that a perfect fit exists
+    let (rc, out, err) = ks_fit(&[
+        "synth",
+        "--material",
+        s(&material),
+        "--out",
+        s(&data),
+        "--points",
+        "6",
+        "--mesh",
+        "8x12",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    // start the thickness 25 % off: the bend tests must bring it back
+    let fabric = data.join("fabric.toml");
+    let text = std::fs::read_to_string(&fabric).unwrap();
+    std::fs::write(
+        &fabric,
+        text.replace("thickness_mm = 0.18", "thickness_mm = 0.225"),
+    )
+    .unwrap();
+    let fitted = dir.join("fitted.toml");
+    let report = dir.join("report");
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&fabric),
+        "-o",
+        s(&fitted),
+        "--report",
+        s(&report),
+        "--mesh-ladder",
+        "8x12",
+        "--max-degree",
+        "2",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    assert!(err.contains("warp stage"), "progress on stderr: {err}");
+    assert!(out.contains("avg_rel_error"), "the table: {out}");
+
+    let m = kshell::material::load_material(&fitted).expect("the output is a material file");
+    assert!(
+        (m.thickness / 0.18e-3 - 1.0).abs() < 0.02,
+        "thickness {}",
+        m.thickness
+    );
+    let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
+    let fit = doc["fit"].as_table().expect("[fit]");
+    assert_eq!(fit["meshes"].as_array().unwrap().len(), 1);
+    assert!(fit["objective_evaluations"].as_integer().unwrap() > 0);
+    let tests = fit["test"].as_array().expect("[[fit.test]]");
+    let mut kinds = Vec::new();
+    for t in tests {
+        let kind = t["kind"].as_str().unwrap();
+        let angle = t["angle_deg"].as_float().unwrap();
+        kinds.push(kind.to_string());
+        match kind {
+            "tensile" => {
+                let e = t["avg_rel_error"].as_float().unwrap();
+                assert!(e <= 0.005, "tensile {angle}°: average relative error {e}");
+            }
+            "bend" => {
+                let a = t["drape_angle_deg"].as_float().unwrap();
+                assert!((a - 41.5).abs() <= 0.2, "bend {angle}°: {a}°");
+            }
+            "validation" => {
+                assert!(t["misalign_deg"].as_float().unwrap().abs() <= 5.0);
+                assert!(t["avg_rel_error"].as_float().unwrap() < 0.1);
+            }
+            other => panic!("unknown kind {other}"),
+        }
+    }
+    for (kind, n) in [("tensile", 3), ("bend", 2), ("validation", 2)] {
+        assert_eq!(kinds.iter().filter(|k| *k == kind).count(), n, "{kinds:?}");
+    }
+    for f in [
+        "tensile-warp-1.csv",
+        "tensile-warp-1.svg",
+        "validation-a22.5-1.csv",
+        "summary.txt",
+    ] {
+        assert!(report.join(f).exists(), "report file {f}");
+    }
+    let csv = std::fs::read_to_string(report.join("tensile-bias-1.csv")).unwrap();
+    assert!(
+        csv.starts_with("elongation_mm,measured_n,fitted_n,rel_error\n"),
+        "{csv}"
+    );
+}
+
+#[test]
+fn datasets_without_warp_or_weft_are_refused() {
+    let dir = folder("bias-only");
+    std::fs::write(
+        dir.join("fabric.toml"),
+        "name = \"x\"\nthickness_mm = 0.2\n[[tensile]]\nangle_deg = 45\nwidth_mm = 50\n\
+         gauge_length_mm = 75\ncurve = \"bias.csv\"\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("bias.csv"), "elongation_mm,force_n\n1,2\n2,5\n").unwrap();
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&dir.join("fabric.toml")),
+        "-o",
+        s(&dir.join("o.toml")),
+    ]);
+    assert_eq!(rc, 2, "{out}{err}");
+    assert!(
+        err.contains("no warp (90°) or weft (0°) tensile test"),
+        "{err}"
+    );
+    let (rc, _, err) = ks_fit(&["fit", s(&dir.join("missing.toml"))]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("missing.toml"), "{err}");
+}
