@@ -107,6 +107,9 @@ enum Command {
         /// Highest polynomial degree of each η tried (lowest first).
         #[arg(long, default_value_t = 3)]
         max_degree: usize,
+        /// Use exactly this degree for every η instead of choosing (for comparisons).
+        #[arg(long)]
+        degree: Option<usize>,
         /// Meshes of a 50 × 75 mm strip, coarse to fine (other strips keep the element size);
         /// later levels are skipped when the last one changed the forces by under 0.2 %.
         #[arg(long, default_value = "8x12,16x24,32x48")]
@@ -330,6 +333,7 @@ fn main() -> ExitCode {
             output,
             report,
             max_degree,
+            degree,
             mesh_ladder,
             method,
             quiet,
@@ -337,7 +341,8 @@ fn main() -> ExitCode {
             &file,
             output.as_deref(),
             report.as_deref(),
-            max_degree,
+            degree.map_or(max_degree, |d| d.max(1)),
+            degree,
             &mesh_ladder,
             method,
             quiet,
@@ -814,6 +819,7 @@ fn cmd_fit(
     output: Option<&std::path::Path>,
     report: Option<&std::path::Path>,
     max_degree: usize,
+    fixed_degree: Option<usize>,
     mesh_ladder: &str,
     method: kshell::fit::optim::Method,
     quiet: bool,
@@ -823,13 +829,14 @@ fn cmd_fit(
     for w in &warnings {
         eprintln!("ks-fit: {w}");
     }
-    if max_degree == 0 {
-        return Err("--max-degree must be at least 1".into());
+    if max_degree == 0 || fixed_degree == Some(0) {
+        return Err("degrees start at 1 (--max-degree, --degree)".into());
     }
     let ladder =
         kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
     let opts = FitOptions {
         max_degree,
+        fixed_degree,
         ladder,
         method,
         ..FitOptions::default()

@@ -45,6 +45,8 @@ pub enum FitError {
 pub struct FitOptions {
     /// Highest degree of each η tried.
     pub max_degree: usize,
+    /// Use exactly this degree for every η (no automatic choice), for comparisons.
+    pub fixed_degree: Option<usize>,
     /// Meshes of a 50 × 75 mm strip, coarse to fine; other strips keep the element size.
     pub ladder: Vec<(usize, usize)>,
     pub method: Method,
@@ -70,6 +72,7 @@ impl Default for FitOptions {
     fn default() -> Self {
         Self {
             max_degree: 3,
+            fixed_degree: None,
             ladder: vec![(8, 12), (16, 24), (32, 48)],
             method: Method::Bfgs,
             skip_tol: 2e-3,
@@ -78,8 +81,8 @@ impl Default for FitOptions {
             max_points: 10,
             coarse_points: 8,
             fit_tol: 1e-3,
-            rel_decrease: 1e-3,
-            max_iterations: 40,
+            rel_decrease: 1e-2,
+            max_iterations: 25,
         }
     }
 }
@@ -489,8 +492,9 @@ impl Fitter<'_> {
         );
         self.say(&line);
         self.degree_log.push(line);
-        for degree in 2..=self.opts.max_degree {
-            if chosen.1 <= self.opts.degree_good {
+        let fixed = self.opts.fixed_degree;
+        for degree in 2..=fixed.unwrap_or(self.opts.max_degree) {
+            if fixed.is_none() && chosen.1 <= self.opts.degree_good {
                 let line = format!(
                     "{}: degree {} kept: error below {:.2} %",
                     map.dir.name(),
@@ -526,7 +530,7 @@ impl Fitter<'_> {
             self.say(&line);
             self.degree_log.push(line);
             all.push(candidate.0.clone());
-            if candidate.1 <= self.opts.degree_gain * chosen.1 {
+            if fixed.is_some() || candidate.1 <= self.opts.degree_gain * chosen.1 {
                 chosen = candidate;
             } else {
                 let line = format!(
@@ -790,6 +794,7 @@ impl Fitter<'_> {
             self.degree_log.push(line);
             let better = match &best {
                 None => true,
+                Some(_) if self.opts.fixed_degree.is_some() => true,
                 Some(b) => err <= self.opts.degree_gain * b.0,
             };
             if better {
@@ -805,7 +810,7 @@ impl Fitter<'_> {
                 self.degree_log.push(line);
                 break;
             }
-            if err <= self.opts.degree_good {
+            if self.opts.fixed_degree.is_none() && err <= self.opts.degree_good {
                 let line = format!(
                     "{}: degree {degree} kept: error below {:.2} %",
                     map.dir.name(),
