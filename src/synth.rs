@@ -200,6 +200,8 @@ fn synth_tensile(
     let run_strip = |angle: f64, test: &str| -> Result<Vec<f64>, SynthError> {
         let mut strip = TensileStrip::new(width, gauge, angle);
         strip.mesh = opts.mesh;
+        // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
+        strip.solver.max_iterations = 500;
         let curve = strip
             .run(material, &elongations)
             .map_err(|source| SynthError::Scene {

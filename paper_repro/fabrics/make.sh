@@ -8,13 +8,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --bin ks-fit
-seed=1
-for m in canvas:0.53 cotton:0.18 silk:0.18 denim:0.66 wool:1.28; do
-  name=${m%%:*}; measured=${m##*:}
+# name:measured thickness (mm):seed; ONLY="cotton silk" remakes a subset
+for m in canvas:0.53:1 cotton:0.18:2 silk:0.18:3 denim:0.66:4 wool:1.28:5; do
+  IFS=: read -r name measured seed <<< "$m"
+  if [ -n "${ONLY:-}" ] && [[ " $ONLY " != *" $name "* ]]; then continue; fi
   out=paper_repro/fabrics/$name
   rm -rf "$out"
   target/release/ks-fit synth --material paper_repro/fabrics/materials/$name.toml --out "$out" \
     --repeats 3 --noise 0.15 --misalign 1 --max-strain 0.08 --seed $seed
   sed -i "s/^thickness_mm = .*/thickness_mm = $measured    # measured (Clyde et al. 2017, Table 2)/" "$out/fabric.toml"
-  seed=$((seed + 1))
 done

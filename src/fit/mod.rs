@@ -50,8 +50,10 @@ pub struct FitOptions {
     /// Meshes of a 50 × 75 mm strip, coarse to fine; other strips keep the element size.
     pub ladder: Vec<(usize, usize)>,
     pub method: Method,
-    /// Skip the remaining levels when moving up one level changes the predicted forces by
-    /// less than this (mean relative change).
+    /// Skip a finer level when it changes (measured, for the second level) or would change
+    /// (estimated at order 1.5 from the last change, for later levels) the fitted forces by
+    /// less than this, mean relative. Default 1 %: below the repeat-to-repeat scatter of
+    /// real tests and the paper's fit errors (Table 3: 1–5 %).
     pub skip_tol: f64,
     /// A degree is raised only if that lowers the mean relative error by at least this factor.
     pub degree_gain: f64,
@@ -75,7 +77,7 @@ impl Default for FitOptions {
             fixed_degree: None,
             ladder: vec![(8, 12), (16, 24), (32, 48)],
             method: Method::Bfgs,
-            skip_tol: 2e-3,
+            skip_tol: 1e-2,
             degree_gain: 0.7,
             degree_good: 2e-3,
             max_points: 10,
@@ -599,6 +601,8 @@ impl Fitter<'_> {
     ) -> Result<StripRig, FitError> {
         let mut strip = TensileStrip::new(test.width, test.gauge_length, angle);
         strip.mesh = strip_mesh(level, test.width, test.gauge_length);
+        // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
+        strip.solver.max_iterations = 500;
         strip
             .rig(&self.material(), elong)
             .map_err(|source| FitError::Scene {
@@ -1139,7 +1143,68 @@ pub fn fit(
     // 4. the shell model, coarse to fine
     let mut meshes = Vec::new();
     let mut previous: Option<Vec<f64>> = None;
+    let mut last_change: Option<f64> = None;
     for (li, &level) in opts.ladder.iter().enumerate() {
+        // 6. is this level worth it? the last level's parameters on this mesh: if the forces
+        // barely move, the discretisation error is below the fit's reach
+        if let (Some(change), true) = (last_change, li >= 2) {
+            // the change this level would bring, from the last measured one at order 1.5
+            // (the slowest order measured on strips: the 45° strip's clamped corners)
+            let estimate = change / 2f64.powf(1.5);
+            if estimate < opts.skip_tol {
+                let from = meshes.last().copied().unwrap_or(level);
+                let note = format!(
+                    "meshes from {}×{} on skipped: estimated to change the {}×{} fit's forces by {:.2} % (the last level changed them by {:.2} %; below {:.2} %)",
+                    level.0,
+                    level.1,
+                    from.0,
+                    from.1,
+                    100.0 * estimate,
+                    100.0 * change,
+                    100.0 * opts.skip_tol
+                );
+                f.say(&note);
+                f.notes.push(note);
+                break;
+            }
+        }
+        if let Some(prev) = &previous {
+            let mut now = Vec::new();
+            for t in [&warp, &weft, &bias].into_iter().flatten() {
+                now.extend(f.predict(t, t.angle_deg, &fit_points(t, opts.max_points), level)?);
+            }
+            let change = prev
+                .iter()
+                .zip(&now)
+                .map(|(a, b)| ((b - a) / b).abs())
+                .sum::<f64>()
+                / now.len().max(1) as f64;
+            let from = meshes.last().copied().unwrap_or(level);
+            let msg = format!(
+                "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
+                from.0,
+                from.1,
+                100.0 * change,
+                level.0,
+                level.1
+            );
+            f.say(&msg);
+            last_change = Some(change);
+            if change < opts.skip_tol {
+                let note = format!(
+                    "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
+                    level.0,
+                    level.1,
+                    from.0,
+                    from.1,
+                    100.0 * change,
+                    100.0 * opts.skip_tol
+                );
+                f.say(&note);
+                f.notes.push(note);
+                break;
+            }
+        }
         meshes.push(level);
         let n = if li == 0 {
             opts.coarse_points
@@ -1181,40 +1246,14 @@ pub fn fit(
         if !data.bend.is_empty() {
             f.thickness_stage(&data.bend, level)?;
         }
-        // 6. is the next level worth it? compare this level's forces with the last level's
-        let mut now = Vec::new();
-        for t in [&warp, &weft, &bias].into_iter().flatten() {
-            let p = &fit_points(t, opts.coarse_points);
-            now.extend(f.predict(t, t.angle_deg, p, level)?);
-        }
-        if let Some(prev) = &previous {
-            let change = prev
-                .iter()
-                .zip(&now)
-                .map(|(a, b)| ((b - a) / b).abs())
-                .sum::<f64>()
-                / now.len().max(1) as f64;
-            let msg = format!(
-                "mesh {}×{} changed the fitted forces by {:.3} % (mean)",
-                level.0,
-                level.1,
-                100.0 * change
-            );
-            f.say(&msg);
-            if change < opts.skip_tol && li + 1 < opts.ladder.len() {
-                let note = format!(
-                    "finer meshes skipped: {}×{} changed the fitted forces by only {:.3} % (below {:.2} %)",
-                    level.0,
-                    level.1,
-                    100.0 * change,
-                    100.0 * opts.skip_tol
-                );
-                f.say(&note);
-                f.notes.push(note);
-                break;
+        // this level's forces at its own fit, on the points the next level fits
+        if li + 1 < opts.ladder.len() {
+            let mut now = Vec::new();
+            for t in [&warp, &weft, &bias].into_iter().flatten() {
+                now.extend(f.predict(t, t.angle_deg, &fit_points(t, opts.max_points), level)?);
             }
+            previous = Some(now);
         }
-        previous = Some(now);
     }
     let last = *meshes.last().expect("one level at least");
     // 7. the report: every test at the final level

@@ -353,6 +353,9 @@ impl TensileStrip {
     }
 }
 
+/// Newton iterations a warm-started strip solve may take before it restarts cold.
+const WARM_ITERATIONS: usize = 40;
+
 /// The parameters (law, then thickness) of an equilibrium and ∂q/∂k there, one row per
 /// parameter.
 type ParameterTangent = (Vec<f64>, Vec<Vec<f64>>);
@@ -465,12 +468,17 @@ impl StripRig {
                 .collect();
             self.system.set_offsets(&offsets);
             let stage = || format!("elongation {:.4} mm", dl * 1e3);
-            let solved =
-                crate::solve::newton_linearized(&self.model, &self.system, &mut x, &self.solver)
-                    .map_err(|source| SceneError::Solve {
-                        stage: stage(),
-                        source,
-                    });
+            // a warm start that needs many iterations has wandered off (parameters far from
+            // the last run's): give up early and restart from the predictor
+            let mut opts = self.solver;
+            if self.equilibria[i].is_some() {
+                opts.max_iterations = opts.max_iterations.min(WARM_ITERATIONS);
+            }
+            let solved = crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts)
+                .map_err(|source| SceneError::Solve {
+                    stage: stage(),
+                    source,
+                });
             let (report, lin) = match solved {
                 Ok(r) => r,
                 Err(e) if self.equilibria[i].is_some() => {
