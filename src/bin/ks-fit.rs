@@ -814,6 +814,7 @@ fn cmd_demo() -> Result<(), String> {
     Ok(())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn cmd_fit(
     file: &std::path::Path,
     output: Option<&std::path::Path>,
