@@ -142,12 +142,8 @@ fn bfgs(
     report.stop = "iteration limit".into();
     for it in 0..opts.max_iterations {
         report.iterations = it;
-        if f <= opts.target {
-            report.stop = "objective below target".into();
-            break;
-        }
-        if g.amax() <= opts.gtol {
-            report.stop = "gradient below tolerance".into();
+        if let Some(stop) = stop_before_step(f, &g, opts) {
+            report.stop = stop.into();
             break;
         }
         let mut d = -(&h * &g);
@@ -168,13 +164,6 @@ fn bfgs(
             report.stop = "line search failed".into();
             break;
         };
-        if std::env::var_os("KS_DEBUG_OPT").is_some() {
-            eprintln!(
-                "bfgs it {it}: f {f:.6e} -> {fa:.6e}, alpha {alpha:.3e}, |d| {:.3e}, evals {}",
-                d.amax(),
-                report.evaluations
-            );
-        }
         let s = alpha * &d;
         let y = &ga - &g;
         let sy = s.dot(&y);
@@ -205,6 +194,17 @@ fn bfgs(
     }
     p.copy_from_slice(x.as_slice());
     report.objective = f;
+}
+
+/// Why to stop before taking a step from ε = f with gradient g, if at all.
+fn stop_before_step(f: f64, g: &DVector<f64>, opts: &OptimOptions) -> Option<&'static str> {
+    if f <= opts.target {
+        Some("objective below target")
+    } else if g.amax() <= opts.gtol {
+        Some("gradient below tolerance")
+    } else {
+        None
+    }
 }
 
 /// Shortens d to ∞-norm `max_step` if it is longer.
@@ -242,12 +242,8 @@ fn hybrid(
     report.stop = "iteration limit".into();
     for it in 0..opts.max_iterations {
         report.iterations = it;
-        if f <= opts.target {
-            report.stop = "objective below target".into();
-            break;
-        }
-        if g.amax() <= opts.gtol {
-            report.stop = "gradient below tolerance".into();
+        if let Some(stop) = stop_before_step(f, &g, opts) {
+            report.stop = stop.into();
             break;
         }
         let mut d = match b.clone().cholesky() {
@@ -262,13 +258,6 @@ fn hybrid(
             report.stop = "line search failed".into();
             break;
         };
-        if std::env::var_os("KS_DEBUG_OPT").is_some() {
-            eprintln!(
-                "hybrid it {it}: f {f:.6e} -> {fa:.6e}, alpha {alpha:.3e}, |d| {:.3e}, evals {}",
-                d.amax(),
-                report.evaluations
-            );
-        }
         let s = alpha * &d;
         let y = &ga - &g;
         x += &s;
@@ -446,15 +435,11 @@ fn gauss_newton(
     report.stop = "iteration limit".into();
     for it in 0..opts.max_iterations {
         report.iterations = it;
-        if f <= opts.target {
-            report.stop = "objective below target".into();
-            break;
-        }
         let j = cur.jacobian.as_ref().expect("Jacobian");
         let r = DVector::from_column_slice(&cur.residuals);
         let g = 2.0 * j.transpose() * &r;
-        if g.amax() <= opts.gtol {
-            report.stop = "gradient below tolerance".into();
+        if let Some(stop) = stop_before_step(f, &g, opts) {
+            report.stop = stop.into();
             break;
         }
         // (JᵀJ + 1e-12 tr/n I) δ = −Jᵀr
