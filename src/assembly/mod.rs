@@ -199,7 +199,8 @@ struct Accumulator {
 /// Reused buffers of one face's Hessian.
 #[derive(Default)]
 struct FaceScratch {
-    r: Vec<[Matrix3<f64>; 5]>,
+    /// R_a = Σ_k W_ak H_k· per stencil node a, as 5 column-major 3 × 3 blocks
+    r: Vec<[f64; 45]>,
     local: Vec<Matrix3<f64>>,
 }
 
@@ -511,7 +512,7 @@ impl ShellModel {
             }
             return Ok((rest.d_area * energy, YVec::zeros(), None));
         }
-        let (m, b) = rest.strains(y, want == Want::Hessian);
+        let (m, b) = rest.strains(y);
         let em = Vector3::from(m.value);
         let eb = Vector3::from(b.value);
         let mut energy = 0.0;
@@ -541,22 +542,21 @@ impl ShellModel {
         if want == Want::Gradient {
             return Ok((da * energy, da * g, None));
         }
-        // Gᵀ C G terms: G rows are the strain gradients
-        let gm = nalgebra::SMatrix::<f64, 3, 15>::from_rows(&[
-            m.grad[0].transpose(),
-            m.grad[1].transpose(),
-            m.grad[2].transpose(),
-        ]);
-        let gb = nalgebra::SMatrix::<f64, 3, 15>::from_rows(&[
-            b.grad[0].transpose(),
-            b.grad[1].transpose(),
-            b.grad[2].transpose(),
-        ]);
-        let cross = gm.transpose() * c1 * gb;
-        let mut h = gm.transpose() * c0 * gm + cross + cross.transpose() + gb.transpose() * c2 * gb;
+        // Gᵀ C G with G (6 × 15) the membrane and bending strain gradients stacked and C the
+        // 6 × 6 section tangent [[C₀, C₁], [C₁, C₂]]: 540 + 1350 multiply-adds
+        let mut gs = nalgebra::SMatrix::<f64, 6, 15>::zeros();
         for k in 0..3 {
-            h += n[k] * m.hess[k] + mo[k] * b.hess[k];
+            gs.set_row(k, &m.grad[k].transpose());
+            gs.set_row(k + 3, &b.grad[k].transpose());
         }
+        let mut cs = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        cs.fixed_view_mut::<3, 3>(0, 0).copy_from(&c0);
+        cs.fixed_view_mut::<3, 3>(0, 3).copy_from(&c1);
+        cs.fixed_view_mut::<3, 3>(3, 0).copy_from(&c1.transpose());
+        cs.fixed_view_mut::<3, 3>(3, 3).copy_from(&c2);
+        let mut h = gs.transpose() * (cs * gs);
+        // the stresses times the strains' own Hessians, formed once as a weighted sum
+        rest.add_weighted_hessian(y, &n, &mo, &mut h);
         Ok((da * energy, da * g, Some(da * h)))
     }
 
@@ -755,34 +755,48 @@ impl ShellModel {
             if let (true, Some(hy)) = (want_h, hy) {
                 let m = idx.len();
                 s.r.clear();
-                s.r.resize(m, [Matrix3::zeros(); 5]);
+                s.r.resize(m, [0.0; 45]);
                 // R_al = Σ_k W_ak H_kl  (3 × 3 blocks)
-                let blocks: [[Matrix3<f64>; 5]; 5] = std::array::from_fn(|k| {
-                    std::array::from_fn(|l| hy.fixed_view::<3, 3>(3 * k, 3 * l).into_owned())
-                });
-                for a in 0..m {
+                // row k of 3 × 3 blocks of H_y, flattened: ht[k][9l + 3j + i] = H_y[3k + i, 3l + j]
+                let mut ht = [[0.0f64; 45]; 5];
+                for (k, row) in ht.iter_mut().enumerate() {
                     for l in 0..5 {
-                        let mut r = Matrix3::zeros();
-                        for k in 0..5 {
-                            let c = w[a][k + 1];
-                            if c != 0.0 {
-                                r += c * blocks[k][l];
+                        for j in 0..3 {
+                            for i in 0..3 {
+                                row[9 * l + 3 * j + i] = hy[(3 * k + i, 3 * l + j)];
                             }
                         }
-                        s.r[a][l] = r;
                     }
+                }
+                // R_a = Σ_k W_ak H_k· : five length-45 multiply-adds per node
+                for a in 0..m {
+                    let mut r = [0.0f64; 45];
+                    for k in 0..5 {
+                        let c = w[a][k + 1];
+                        for (x, h) in r.iter_mut().zip(&ht[k]) {
+                            *x += c * h;
+                        }
+                    }
+                    s.r[a] = r;
                 }
                 // H_ab = Σ_l R_al W_bl, into the face's packed upper triangle
                 for a in 0..m {
                     let la = local[a] as usize;
+                    let ra = &s.r[a];
                     for b in a..m {
-                        let mut blk = Matrix3::zeros();
+                        let mut blk = [0.0f64; 9];
                         for l in 0..5 {
-                            blk += w[b][l + 1] * s.r[a][l];
+                            let c = w[b][l + 1];
+                            for (x, r) in blk.iter_mut().zip(&ra[9 * l..9 * l + 9]) {
+                                *x += c * r;
+                            }
                         }
                         let lb = local[b] as usize;
                         // stencil and face node lists are both sorted, so la ≤ lb
-                        s.local[la * n - la * (la + 1) / 2 + lb] += blk;
+                        let dst = &mut s.local[la * n - la * (la + 1) / 2 + lb];
+                        for (x, v) in dst.as_mut_slice().iter_mut().zip(&blk) {
+                            *x += v;
+                        }
                     }
                 }
             }
@@ -884,7 +898,7 @@ impl ShellModel {
             }
             let y = kinematic_vector(&d);
             let rest = &self.rest[q];
-            let (m, b) = rest.strains(&y, false);
+            let (m, b) = rest.strains(&y);
             let em = Vector3::from(m.value);
             let eb = Vector3::from(b.value);
             let da = rest.d_area;

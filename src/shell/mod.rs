@@ -27,12 +27,13 @@ const A1: usize = 0;
 const A2: usize = 3;
 const H: [usize; 3] = [6, 9, 12];
 
-/// Three strain components with their gradients and Hessians with respect to y.
+/// Three strain components with their gradients with respect to y. Their Hessians are never
+/// formed one by one: Newton needs only the stress-weighted sum Σ_k s_k ∂²E_k/∂y²
+/// ([`add_membrane_hessian`], [`add_bending_hessian`]), which costs about as much as one of them.
 #[derive(Clone, Debug)]
 pub struct StrainJet {
     pub value: [f64; 3],
     pub grad: [YVec; 3],
-    pub hess: [YMat; 3],
 }
 
 impl StrainJet {
@@ -40,23 +41,17 @@ impl StrainJet {
         Self {
             value: [0.0; 3],
             grad: [YVec::zeros(); 3],
-            hess: [YMat::zeros(); 3],
         }
     }
 
-    /// The jet of T·E (a fixed linear map of the components); Hessians only if asked.
-    pub fn mapped(&self, t: &Matrix3<f64>, hessian: bool) -> StrainJet {
+    /// The jet of T·E (a fixed linear map of the components).
+    pub fn mapped(&self, t: &Matrix3<f64>) -> StrainJet {
         let mut out = StrainJet::zero();
         for k in 0..3 {
             for j in 0..3 {
                 let a = t[(k, j)];
-                if a != 0.0 {
-                    out.value[k] += a * self.value[j];
-                    out.grad[k] += a * self.grad[j];
-                    if hessian {
-                        out.hess[k] += a * self.hess[j];
-                    }
-                }
+                out.value[k] += a * self.value[j];
+                out.grad[k] += a * self.grad[j];
             }
         }
         out
@@ -67,17 +62,20 @@ fn v3(y: &YVec, at: usize) -> Vector3<f64> {
     Vector3::new(y[at], y[at + 1], y[at + 2])
 }
 
-fn set_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
-    m.fixed_view_mut::<3, 3>(r, c).copy_from(b);
-}
-
 fn add_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
     let mut v = m.fixed_view_mut::<3, 3>(r, c);
     v += b;
 }
 
-/// Membrane strain ε_αβ = ½(a_α·a_β − A_αβ) and its derivatives; `rest` is (A₁₁, A₂₂, A₁₂).
-pub fn membrane(y: &YVec, rest: [f64; 3], hessian: bool) -> StrainJet {
+/// Adds s·I to the 3 × 3 block (r, c).
+fn add_diagonal(m: &mut YMat, r: usize, c: usize, s: f64) {
+    for i in 0..3 {
+        m[(r + i, c + i)] += s;
+    }
+}
+
+/// Membrane strain ε_αβ = ½(a_α·a_β − A_αβ) and its gradient; `rest` is (A₁₁, A₂₂, A₁₂).
+pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let mut j = StrainJet::zero();
     j.value = [
@@ -89,15 +87,16 @@ pub fn membrane(y: &YVec, rest: [f64; 3], hessian: bool) -> StrainJet {
     j.grad[1].fixed_rows_mut::<3>(A2).copy_from(&a2);
     j.grad[2].fixed_rows_mut::<3>(A1).copy_from(&(0.5 * a2));
     j.grad[2].fixed_rows_mut::<3>(A2).copy_from(&(0.5 * a1));
-    if !hessian {
-        return j;
-    }
-    let id = Matrix3::identity();
-    set_block(&mut j.hess[0], A1, A1, &id);
-    set_block(&mut j.hess[1], A2, A2, &id);
-    set_block(&mut j.hess[2], A1, A2, &(0.5 * id));
-    set_block(&mut j.hess[2], A2, A1, &(0.5 * id));
     j
+}
+
+/// h += Σ_k s_k ∂²ε_k/∂y²: constant, s₁ I on (a₁, a₁), s₂ I on (a₂, a₂) and s₃/2 I on the
+/// (a₁, a₂) blocks.
+pub fn add_membrane_hessian(s: &[f64; 3], h: &mut YMat) {
+    add_diagonal(h, A1, A1, s[0]);
+    add_diagonal(h, A2, A2, s[1]);
+    add_diagonal(h, A1, A2, 0.5 * s[2]);
+    add_diagonal(h, A2, A1, 0.5 * s[2]);
 }
 
 /// Skew matrix [v]× with [v]× w = v × w.
@@ -105,54 +104,74 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
 }
 
-/// Bending strain κ_αβ = B_αβ − x,_αβ · a₃ and its derivatives; `rest` is (B₁₁, B₂₂, B₁₂).
+/// The second derivatives x,₁₁, x,₂₂, x,₁₂ in y, in strain component order (11, 22, 12).
+const H_OF_COMPONENT: [usize; 3] = [H[0], H[2], H[1]];
+
+/// Bending strain κ_αβ = B_αβ − x,_αβ · a₃ and its gradient; `rest` is (B₁₁, B₂₂, B₁₂).
 ///
 /// With m = a₁ × a₂, l = |m|, n = m / l and h = x,_αβ, the curvature b = h·m/l has
-/// ∂b/∂m = v = (h − (h·n) n)/l, ∂²b/∂m² = −(h nᵀ + n hᵀ + (h·n)(I − 3 n nᵀ))/l² and
-/// ∂²b/∂m∂h = (I − n nᵀ)/l; the chain rule through m (∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]×, and
-/// ∂²m/∂a₁∂a₂ contracted with v = −[v]×) gives the rest.
-pub fn bending(y: &YVec, rest: [f64; 3], hessian: bool) -> StrainJet {
+/// ∂b/∂m = v = (h − (h·n) n)/l; the chain rule through m (∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]×)
+/// gives the rest.
+pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
+    let (a1, a2) = (v3(y, A1), v3(y, A2));
+    let m = a1.cross(&a2);
+    let l = m.norm();
+    let n = m / l;
+    let mut j = StrainJet::zero();
+    for (k, &hk) in H_OF_COMPONENT.iter().enumerate() {
+        let h = v3(y, hk);
+        let hn = h.dot(&n);
+        let v = (h - hn * n) / l;
+        j.value[k] = rest[k] - hn;
+        let g = &mut j.grad[k];
+        g.fixed_rows_mut::<3>(A1).copy_from(&(-a2.cross(&v)));
+        g.fixed_rows_mut::<3>(A2).copy_from(&(-v.cross(&a1)));
+        g.fixed_rows_mut::<3>(hk).copy_from(&(-n));
+    }
+    j
+}
+
+/// h += Σ_k s_k ∂²κ_k/∂y².
+///
+/// Every term of ∂²b/∂y² is linear in h = x,_αβ: ∂²b/∂m² = −(h nᵀ + n hᵀ + (h·n)(I − 3 n nᵀ))/l²
+/// and ∂b/∂m = v, while ∂²b/∂m∂h = (I − n nᵀ)/l does not depend on h. So the weighted sum is
+/// one curvature's Hessian evaluated at h̄ = Σ_k s_k h_k (the a₁, a₂ blocks, through
+/// ∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]× and ∂²m/∂a₁∂a₂ contracted with v̄ = −[v̄]×), plus s_k times
+/// the fixed (a_α, h_k) coupling blocks.
+pub fn add_bending_hessian(y: &YVec, s: &[f64; 3], out: &mut YMat) {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let m = a1.cross(&a2);
     let l = m.norm();
     let n = m / l;
     let p = Matrix3::identity() - n * n.transpose();
     let (s1, s2) = (skew(&a1), skew(&a2));
-    let mut j = StrainJet::zero();
-    // component order (11, 22, 12) against the second derivatives stored as (11, 12, 22)
-    for (k, &hk) in [H[0], H[2], H[1]].iter().enumerate() {
-        let h = v3(y, hk);
-        let hn = h.dot(&n);
-        let v = (h - hn * n) / l;
-        let mm = -(h * n.transpose()
-            + n * h.transpose()
-            + hn * (Matrix3::identity() - 3.0 * n * n.transpose()))
-            / (l * l);
-        let b = h.dot(&n);
-        j.value[k] = rest[k] - b;
-        let g = &mut j.grad[k];
-        g.fixed_rows_mut::<3>(A1).copy_from(&(-a2.cross(&v)));
-        g.fixed_rows_mut::<3>(A2).copy_from(&(-v.cross(&a1)));
-        g.fixed_rows_mut::<3>(hk).copy_from(&(-n));
-        if !hessian {
-            continue;
-        }
-        let hs = &mut j.hess[k];
-        let b11 = s2 * mm * s2; // −(−[a₂]× M [a₂]×)
-        let b22 = s1 * mm * s1;
-        let b12 = -(s2 * mm * s1 - skew(&v));
-        let b1h = -(s2 * p / l);
-        let b2h = s1 * p / l;
-        set_block(hs, A1, A1, &b11);
-        set_block(hs, A2, A2, &b22);
-        set_block(hs, A1, A2, &b12);
-        set_block(hs, A2, A1, &b12.transpose());
-        add_block(hs, A1, hk, &b1h);
-        add_block(hs, hk, A1, &b1h.transpose());
-        add_block(hs, A2, hk, &b2h);
-        add_block(hs, hk, A2, &b2h.transpose());
+    let mut hbar = Vector3::zeros();
+    for (k, &hk) in H_OF_COMPONENT.iter().enumerate() {
+        hbar += s[k] * v3(y, hk);
     }
-    j
+    let hn = hbar.dot(&n);
+    let v = (hbar - hn * n) / l;
+    let mm = -(hbar * n.transpose()
+        + n * hbar.transpose()
+        + hn * (Matrix3::identity() - 3.0 * n * n.transpose()))
+        / (l * l);
+    // the curvature enters κ with a minus sign
+    let b11 = s2 * mm * s2;
+    let b22 = s1 * mm * s1;
+    let b12 = -(s2 * mm * s1 - skew(&v));
+    add_block(out, A1, A1, &b11);
+    add_block(out, A2, A2, &b22);
+    add_block(out, A1, A2, &b12);
+    add_block(out, A2, A1, &b12.transpose());
+    let b1h = -(s2 * p / l);
+    let b2h = s1 * p / l;
+    for (k, &hk) in H_OF_COMPONENT.iter().enumerate() {
+        let (c1, c2) = (s[k] * b1h, s[k] * b2h);
+        add_block(out, A1, hk, &c1);
+        add_block(out, hk, A1, &c1.transpose());
+        add_block(out, A2, hk, &c2);
+        add_block(out, hk, A2, &c2.transpose());
+    }
 }
 
 /// Per-Gauss-point rest data.
@@ -237,12 +256,28 @@ impl RestPoint {
         })
     }
 
-    /// Membrane and bending strain jets in the warp/weft frame (Hessians only if asked).
-    pub fn strains(&self, y: &YVec, hessian: bool) -> (StrainJet, StrainJet) {
+    /// Membrane and bending strain jets in the warp/weft frame.
+    pub fn strains(&self, y: &YVec) -> (StrainJet, StrainJet) {
         (
-            membrane(y, self.metric, hessian).mapped(&self.to_material, hessian),
-            bending(y, self.curvature, hessian).mapped(&self.to_material, hessian),
+            membrane(y, self.metric).mapped(&self.to_material),
+            bending(y, self.curvature).mapped(&self.to_material),
         )
+    }
+
+    /// h += Σ_k n_k ∂²Ẽm_k/∂y² + mo_k ∂²Ẽb_k/∂y² for weights n, mo on the warp/weft-frame
+    /// membrane and bending strains (the stress resultants in Newton's Hessian). Since
+    /// Ẽ = T E, the weights are pulled back to surface coordinates once, Tᵀn, and the
+    /// surface strains' weighted Hessians are added.
+    pub fn add_weighted_hessian(
+        &self,
+        y: &YVec,
+        n: &Vector3<f64>,
+        mo: &Vector3<f64>,
+        h: &mut YMat,
+    ) {
+        let t = self.to_material.transpose();
+        add_membrane_hessian(&(t * n).into(), h);
+        add_bending_hessian(y, &(t * mo).into(), h);
     }
 
     /// Membrane and bending strains alone, in the warp/weft frame (the energy needs no more).
@@ -274,9 +309,14 @@ mod tests {
         ])
     }
 
-    fn check_jet(f: impl Fn(&YVec) -> StrainJet) {
+    /// Gradients against central differences of the values, and the weighted Hessian
+    /// (weights s) against central differences of the weighted gradients.
+    fn check_jet(f: impl Fn(&YVec) -> StrainJet, hess: impl Fn(&YVec, &[f64; 3], &mut YMat)) {
         let y0 = sample_y();
         let j0 = f(&y0);
+        let s = [0.7, -1.3, 0.45];
+        let mut h0 = YMat::zeros();
+        hess(&y0, &s, &mut h0);
         let h = 1e-6;
         for i in 0..NY {
             let mut yp = y0;
@@ -291,22 +331,56 @@ mod tests {
                     "grad k={k} i={i}: {fd} vs {}",
                     j0.grad[k][i]
                 );
-                for r in 0..NY {
-                    let fd = (jp.grad[k][r] - jm.grad[k][r]) / (2.0 * h);
-                    assert!(
-                        (fd - j0.hess[k][(r, i)]).abs() < 1e-7,
-                        "hess k={k} ({r},{i}): {fd} vs {}",
-                        j0.hess[k][(r, i)]
-                    );
-                }
+            }
+            for r in 0..NY {
+                let fd: f64 = (0..3)
+                    .map(|k| s[k] * (jp.grad[k][r] - jm.grad[k][r]) / (2.0 * h))
+                    .sum();
+                assert!(
+                    (fd - h0[(r, i)]).abs() < 1e-7,
+                    "hess ({r},{i}): {fd} vs {}",
+                    h0[(r, i)]
+                );
             }
         }
     }
 
     #[test]
     fn membrane_and_bending_derivatives_match_differences() {
-        check_jet(|y| membrane(y, [1.0, 0.8, 0.1], true));
-        check_jet(|y| bending(y, [0.1, -0.2, 0.05], true));
+        check_jet(
+            |y| membrane(y, [1.0, 0.8, 0.1]),
+            |_, s, h| add_membrane_hessian(s, h),
+        );
+        check_jet(|y| bending(y, [0.1, -0.2, 0.05]), add_bending_hessian);
+    }
+
+    #[test]
+    fn weighted_hessian_in_the_material_frame_matches_differences() {
+        let d = [
+            [0.0; 3],
+            [1.0, 0.1, 0.0],
+            [0.2, 0.9, 0.1],
+            [0.0, 0.1, 0.3],
+            [0.1, 0.0, -0.2],
+            [0.0; 3],
+        ];
+        let rest = RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap();
+        let (n, mo) = (Vector3::new(0.3, -0.8, 1.1), Vector3::new(-0.5, 0.2, 0.9));
+        let combined = |y: &YVec| {
+            let (m, b) = rest.strains(y);
+            let mut j = StrainJet::zero();
+            for k in 0..3 {
+                j.value[k] = m.value[k] * n[k] + b.value[k] * mo[k];
+                j.grad[k] = m.grad[k] * n[k] + b.grad[k] * mo[k];
+            }
+            j
+        };
+        // component k of `combined` is n_k Ẽm_k + mo_k Ẽb_k, so weighting it by s_k is
+        // weighting the strains by s_k n_k and s_k mo_k
+        check_jet(combined, |y, s, h| {
+            let w = |v: &Vector3<f64>| Vector3::new(s[0] * v[0], s[1] * v[1], s[2] * v[2]);
+            rest.add_weighted_hessian(y, &w(&n), &w(&mo), h);
+        });
     }
 
     #[test]
@@ -321,7 +395,7 @@ mod tests {
         ];
         let rest = RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap();
         let y = sample_y();
-        let (m, b) = rest.strains(&y, false);
+        let (m, b) = rest.strains(&y);
         let (em, eb) = rest.strain_values(&y);
         for k in 0..3 {
             assert!((m.value[k] - em[k]).abs() < 1e-14);
