@@ -369,6 +369,9 @@ struct Fitter<'a> {
     predictions: std::collections::HashMap<(RigKey, Vec<u64>), Vec<f64>>,
 }
 
+/// Strips cut within this many degrees of each other share warm starts.
+const NEAR_ANGLE_DEG: f64 = 1.5;
+
 /// ([width, gauge length, angle] bits, mesh level, elongation bits) of a cached strip.
 type RigKey = ([u64; 3], (usize, usize), Vec<u64>);
 
@@ -593,7 +596,20 @@ impl Fitter<'_> {
         if let Some(rig) = self.rigs.remove(&key) {
             return Ok((key, rig));
         }
-        self.new_rig(test, angle, level, elong).map(|r| (key, r))
+        let mut rig = self.new_rig(test, angle, level, elong)?;
+        // a strip cut at a nearby angle (the validation Δθ grid) starts from the nearest such
+        // strip's equilibria rather than from rest
+        let nearest = self
+            .rigs
+            .iter()
+            .filter(|(k, _)| k.0[..2] == key.0[..2] && k.1 == key.1 && k.2 == key.2)
+            .map(|(k, r)| ((f64::from_bits(k.0[2]) - angle).abs(), r))
+            .filter(|(d, _)| *d <= NEAR_ANGLE_DEG)
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, other)) = nearest {
+            rig.warm_from(other);
+        }
+        Ok((key, rig))
     }
 
     fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {

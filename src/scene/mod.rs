@@ -354,7 +354,7 @@ impl TensileStrip {
 }
 
 /// Newton iterations a warm-started strip solve may take before it restarts cold.
-const WARM_ITERATIONS: usize = 40;
+const WARM_ITERATIONS: usize = 12;
 
 /// The parameters (law, then thickness) of an equilibrium and ∂q/∂k there, one row per
 /// parameter.
@@ -414,6 +414,27 @@ impl StripRig {
         &self.elongations
     }
 
+    /// Takes `other`'s equilibria as this rig's warm starts, where the two rigs share the
+    /// mesh, the clamps and the elongations (strips cut at nearby angles: the angle changes
+    /// only the material frame, not the control net). Returns whether they were taken. The
+    /// parameter tangents are not taken: they belong to the other angle's equilibria.
+    pub fn warm_from(&mut self, other: &StripRig) -> bool {
+        let same = self.elongations == other.elongations
+            && self.length == other.length
+            && self.model.basis.control_points == other.model.basis.control_points
+            && self.bottom_fixed == other.bottom_fixed
+            && self.top_fixed == other.top_fixed;
+        if !same {
+            return false;
+        }
+        for (mine, theirs) in self.equilibria.iter_mut().zip(&other.equilibria) {
+            if mine.is_none() {
+                mine.clone_from(theirs);
+            }
+        }
+        true
+    }
+
     /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's
     /// parameters and then the thickness (adjoint form of Clyde et al. 2017, Eq. 6: with
     /// F = rᵀg(x, k) and K λ = Tᵀ H r, dF/dk = rᵀ ∂g/∂k − λᵀ Tᵀ ∂g/∂k; one solve per point
@@ -426,40 +447,32 @@ impl StripRig {
         let mut previous: Option<(f64, Vec<Vec3>)> = None;
         for i in 0..self.elongations.len() {
             let dl = self.elongations[i];
-            let mut x = match (&self.equilibria[i], &previous) {
-                (Some(x), _) => {
-                    let mut x = x.clone();
-                    // first-order predictor along the parameter change
-                    if let Some((k0, dq)) = &self.tangents[i] {
-                        if k0.len() == self.params.len() {
-                            let mut d = vec![0.0; self.system.num_free];
-                            for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
-                                let dk = k - k0;
-                                if dk != 0.0 {
-                                    d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
-                                }
-                            }
-                            self.system.advance(&mut x, &d);
-                        }
-                    }
-                    x
+            // predictor: stretch the last equilibrium affinely to the new jaw position
+            let cold = |previous: &Option<(f64, Vec<Vec3>)>| {
+                let (current, mut x) = previous.clone().unwrap_or((0.0, rest.clone()));
+                let s = (self.length + dl) / (self.length + current);
+                for p in &mut x {
+                    p[1] *= s;
                 }
-                // predictor: stretch the last equilibrium affinely to the new jaw position
-                (None, prev) => {
-                    let (current, mut x) = prev.clone().unwrap_or((0.0, rest.clone()));
-                    let s = (self.length + dl) / (self.length + current);
-                    for p in &mut x {
-                        p[1] *= s;
-                    }
-                    x
-                }
+                x
             };
-            for &d in &self.bottom_fixed {
-                x[d / 3][d % 3] = rest[d / 3][d % 3];
-            }
-            for &d in &self.top_fixed {
-                x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
-            }
+            let warm = self.equilibria[i].as_ref().map(|x| {
+                let mut x = x.clone();
+                // first-order predictor along the parameter change
+                if let Some((k0, dq)) = &self.tangents[i] {
+                    if k0.len() == self.params.len() {
+                        let mut d = vec![0.0; self.system.num_free];
+                        for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
+                            let dk = k - k0;
+                            if dk != 0.0 {
+                                d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
+                            }
+                        }
+                        self.system.advance(&mut x, &d);
+                    }
+                }
+                x
+            });
             let offsets: Vec<f64> = self
                 .base
                 .iter()
@@ -468,26 +481,32 @@ impl StripRig {
                 .collect();
             self.system.set_offsets(&offsets);
             let stage = || format!("elongation {:.4} mm", dl * 1e3);
-            // a warm start that needs many iterations has wandered off (parameters far from
-            // the last run's): give up early and restart from the predictor
-            let mut opts = self.solver;
-            if self.equilibria[i].is_some() {
-                opts.max_iterations = opts.max_iterations.min(WARM_ITERATIONS);
-            }
-            let solved = crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts)
-                .map_err(|source| SceneError::Solve {
-                    stage: stage(),
-                    source,
-                });
-            let (report, lin) = match solved {
-                Ok(r) => r,
-                Err(e) if self.equilibria[i].is_some() => {
-                    // the warm start came from other parameters: retry from the predictor
-                    self.equilibria[i] = None;
-                    let _ = e;
-                    return self.run(sensitivities);
+            let solve = |mut x: Vec<Vec3>, max_iterations: usize| {
+                for &d in &self.bottom_fixed {
+                    x[d / 3][d % 3] = rest[d / 3][d % 3];
                 }
-                Err(e) => return Err(e),
+                for &d in &self.top_fixed {
+                    x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
+                }
+                let opts = NewtonOptions {
+                    max_iterations,
+                    ..self.solver
+                };
+                crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts)
+                    .map(|(report, lin)| (x, report, lin))
+                    .map_err(|source| SceneError::Solve {
+                        stage: stage(),
+                        source,
+                    })
+            };
+            // a warm start that needs many iterations has wandered off (parameters far from
+            // the last run's): give up early and solve from the predictor instead
+            let (x, report, lin) = match warm {
+                Some(x) => match solve(x, self.solver.max_iterations.min(WARM_ITERATIONS)) {
+                    Ok(r) => r,
+                    Err(_) => solve(cold(&previous), self.solver.max_iterations)?,
+                },
+                None => solve(cold(&previous), self.solver.max_iterations)?,
             };
             let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
                 stage: "reaction".into(),
