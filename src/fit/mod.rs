@@ -369,6 +369,11 @@ struct Fitter<'a> {
     predictions: std::collections::HashMap<(RigKey, Vec<u64>), Vec<f64>>,
 }
 
+/// Newton iterations a trial point's cold solve may take after its warm start failed (cold
+/// solves of the bundled fabrics take 3–10 iterations, 20–60 where the strip wrinkles; trial
+/// points far from the fit took up to 500 and still failed).
+const TRIAL_RETRY_ITERATIONS: usize = 100;
+
 /// Strips cut within this many degrees of each other share warm starts.
 const NEAR_ANGLE_DEG: f64 = 1.5;
 
@@ -694,7 +699,11 @@ impl Fitter<'_> {
             let mut law = base.clone();
             map.decode(q, &mut law);
             rig.set_material(&law, tau)?;
-            let pts = rig.run(jac)?;
+            // the stage's first evaluation must succeed; later ones are trials
+            rig.retry_iterations = (evals > 0).then_some(TRIAL_RETRY_ITERATIONS);
+            let pts = rig.run(jac);
+            rig.retry_iterations = None;
+            let pts = pts?;
             evals += 1;
             newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
             let fitted: Vec<f64> = pts.iter().map(|p| p.force).collect();
@@ -886,10 +895,19 @@ impl Fitter<'_> {
             (law, tau)
         };
         let mut p = vec![0.0];
+        // as for the tensile stages, finer levels only polish the last level's thickness
+        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
+            (self.opts.max_iterations, self.opts.rel_decrease)
+        } else {
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
+        };
         let opts = OptimOptions {
             method: self.opts.method,
-            max_iterations: self.opts.max_iterations,
-            rel_decrease: self.opts.rel_decrease,
+            max_iterations,
+            rel_decrease,
             gtol: 1e-14,
             target: bends.len() as f64 * self.opts.fit_tol.powi(2),
             max_step: 0.5,

@@ -361,6 +361,9 @@ const C2: f64 = 0.9;
 
 /// Zoom between `lo` (sufficient decrease holds) and the other end `a_hi` (its trial, if the
 /// evaluation succeeded), by safeguarded cubic interpolation (Nocedal & Wright, Alg. 3.6).
+/// Most trial points one zoom phase evaluates.
+const ZOOM_EVALUATIONS: usize = 8;
+
 fn zoom(
     mut lo: Trial,
     mut hi: Option<Trial>,
@@ -370,7 +373,9 @@ fn zoom(
     phi: &mut impl FnMut(f64, &mut OptimReport) -> Option<Trial>,
     report: &mut OptimReport,
 ) -> Option<Step> {
-    for _ in 0..30 {
+    // a zoom that has not met the conditions in ZOOM_EVALUATIONS trials is as a rule fighting
+    // the noise floor of the equilibrium solves (denim's thickness polish spent 30 that way)
+    for _ in 0..ZOOM_EVALUATIONS {
         let (l, h) = (lo.0.min(a_hi), lo.0.max(a_hi));
         let width = h - l;
         if width <= 1e-14 * h.max(1e-300) {

@@ -349,6 +349,7 @@ impl TensileStrip {
                 k
             },
             wanted: None,
+            retry_iterations: None,
         })
     }
 }
@@ -365,6 +366,11 @@ type ParameterTangent = (Vec<f64>, Vec<Vec<f64>>);
 pub struct StripRig {
     length: f64,
     pub solver: NewtonOptions,
+    /// Iterations allowed to the cold solve that follows a failed warm start (`None`: the
+    /// solver's own limit). A fitter probing trial parameters sets a lower one: a trial whose
+    /// equilibrium is that hard to reach is better rejected (its line search steps back) than
+    /// crept up on by hundreds of backward-Euler steps.
+    pub retry_iterations: Option<usize>,
     model: ShellModel,
     system: FreeSystem,
     bottom_fixed: Vec<usize>,
@@ -504,7 +510,12 @@ impl StripRig {
             let (x, report, lin) = match warm {
                 Some(x) => match solve(x, self.solver.max_iterations.min(WARM_ITERATIONS)) {
                     Ok(r) => r,
-                    Err(_) => solve(cold(&previous), self.solver.max_iterations)?,
+                    Err(_) => solve(
+                        cold(&previous),
+                        self.retry_iterations
+                            .unwrap_or(self.solver.max_iterations)
+                            .min(self.solver.max_iterations),
+                    )?,
                 },
                 None => solve(cold(&previous), self.solver.max_iterations)?,
             };
