@@ -497,6 +497,7 @@ impl ShellModel {
     }
 
     /// Energy, gradient and Hessian of one Gauss point with respect to y.
+    #[inline(always)]
     fn point_terms(
         &self,
         q: usize,
@@ -598,10 +599,7 @@ impl ShellModel {
                         Vec::new()
                     },
                 };
-                let mut scratch = FaceScratch::default();
-                for face in faces {
-                    self.face_terms(face, x, want, &mut acc, &mut scratch)?;
-                }
+                self.faces_dispatch(faces, x, want, &mut acc)?;
                 Ok(acc)
             })
             .collect();
@@ -647,6 +645,7 @@ impl ShellModel {
     /// Hessian (the triple product is trilinear: ∂²/∂x∂x_u = −[x_v]×, ∂²/∂x∂x_v = [x_u]×,
     /// ∂²/∂x_u∂x_v = −[x]×).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     fn pressure_terms(
         &self,
         q: usize,
@@ -705,7 +704,57 @@ impl ShellModel {
         }
     }
 
+    /// Adds the terms of `faces` to `acc`, with the face loop compiled for AVX2 + FMA when the
+    /// CPU has them (checked at run time; the same operations in the same order, so the same
+    /// results, about 1.4× faster on the Hessian) and for baseline x86-64 otherwise.
+    fn faces_dispatch(
+        &self,
+        faces: std::ops::Range<usize>,
+        x: &[Vec3],
+        want: Want,
+        acc: &mut Accumulator,
+    ) -> Result<(), OutOfDomain> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU has the features `faces_avx2` was compiled for
+                return unsafe { self.faces_avx2(faces, x, want, acc) };
+            }
+        }
+        self.faces(faces, x, want, acc)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn faces_avx2(
+        &self,
+        faces: std::ops::Range<usize>,
+        x: &[Vec3],
+        want: Want,
+        acc: &mut Accumulator,
+    ) -> Result<(), OutOfDomain> {
+        self.faces(faces, x, want, acc)
+    }
+
+    #[inline(always)]
+    fn faces(
+        &self,
+        faces: std::ops::Range<usize>,
+        x: &[Vec3],
+        want: Want,
+        acc: &mut Accumulator,
+    ) -> Result<(), OutOfDomain> {
+        let mut scratch = FaceScratch::default();
+        for face in faces {
+            self.face_terms(face, x, want, acc, &mut scratch)?;
+        }
+        Ok(())
+    }
+
     /// Adds one face's energy, gradient and Hessian to `acc`.
+    #[inline(always)]
     fn face_terms(
         &self,
         face: usize,

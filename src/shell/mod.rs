@@ -45,6 +45,7 @@ impl StrainJet {
     }
 
     /// The jet of T·E (a fixed linear map of the components).
+    #[inline]
     pub fn mapped(&self, t: &Matrix3<f64>) -> StrainJet {
         let mut out = StrainJet::zero();
         for k in 0..3 {
@@ -58,16 +59,19 @@ impl StrainJet {
     }
 }
 
+#[inline]
 fn v3(y: &YVec, at: usize) -> Vector3<f64> {
     Vector3::new(y[at], y[at + 1], y[at + 2])
 }
 
+#[inline]
 fn add_block(m: &mut YMat, r: usize, c: usize, b: &Matrix3<f64>) {
     let mut v = m.fixed_view_mut::<3, 3>(r, c);
     v += b;
 }
 
 /// Adds s·I to the 3 × 3 block (r, c).
+#[inline]
 fn add_diagonal(m: &mut YMat, r: usize, c: usize, s: f64) {
     for i in 0..3 {
         m[(r + i, c + i)] += s;
@@ -75,6 +79,7 @@ fn add_diagonal(m: &mut YMat, r: usize, c: usize, s: f64) {
 }
 
 /// Membrane strain ε_αβ = ½(a_α·a_β − A_αβ) and its gradient; `rest` is (A₁₁, A₂₂, A₁₂).
+#[inline]
 pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let mut j = StrainJet::zero();
@@ -92,6 +97,7 @@ pub fn membrane(y: &YVec, rest: [f64; 3]) -> StrainJet {
 
 /// h += Σ_k s_k ∂²ε_k/∂y²: constant, s₁ I on (a₁, a₁), s₂ I on (a₂, a₂) and s₃/2 I on the
 /// (a₁, a₂) blocks.
+#[inline]
 pub fn add_membrane_hessian(s: &[f64; 3], h: &mut YMat) {
     add_diagonal(h, A1, A1, s[0]);
     add_diagonal(h, A2, A2, s[1]);
@@ -100,6 +106,7 @@ pub fn add_membrane_hessian(s: &[f64; 3], h: &mut YMat) {
 }
 
 /// Skew matrix [v]× with [v]× w = v × w.
+#[inline]
 fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
 }
@@ -112,6 +119,7 @@ const H_OF_COMPONENT: [usize; 3] = [H[0], H[2], H[1]];
 /// With m = a₁ × a₂, l = |m|, n = m / l and h = x,_αβ, the curvature b = h·m/l has
 /// ∂b/∂m = v = (h − (h·n) n)/l; the chain rule through m (∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]×)
 /// gives the rest.
+#[inline]
 pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let m = a1.cross(&a2);
@@ -138,6 +146,7 @@ pub fn bending(y: &YVec, rest: [f64; 3]) -> StrainJet {
 /// one curvature's Hessian evaluated at h̄ = Σ_k s_k h_k (the a₁, a₂ blocks, through
 /// ∂m/∂a₁ = −[a₂]×, ∂m/∂a₂ = [a₁]× and ∂²m/∂a₁∂a₂ contracted with v̄ = −[v̄]×), plus s_k times
 /// the fixed (a_α, h_k) coupling blocks.
+#[inline]
 pub fn add_bending_hessian(y: &YVec, s: &[f64; 3], out: &mut YMat) {
     let (a1, a2) = (v3(y, A1), v3(y, A2));
     let m = a1.cross(&a2);
@@ -257,6 +266,7 @@ impl RestPoint {
     }
 
     /// Membrane and bending strain jets in the warp/weft frame.
+    #[inline]
     pub fn strains(&self, y: &YVec) -> (StrainJet, StrainJet) {
         (
             membrane(y, self.metric).mapped(&self.to_material),
@@ -268,6 +278,7 @@ impl RestPoint {
     /// membrane and bending strains (the stress resultants in Newton's Hessian). Since
     /// Ẽ = T E, the weights are pulled back to surface coordinates once, Tᵀn, and the
     /// surface strains' weighted Hessians are added.
+    #[inline]
     pub fn add_weighted_hessian(
         &self,
         y: &YVec,
