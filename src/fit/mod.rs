@@ -716,9 +716,10 @@ impl Fitter<'_> {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
             source,
         };
-        if level == self.opts.ladder[0] {
+        {
             // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
-            // jaws stop the strip from shearing freely): first fit the stiffness c alone
+            // jaws stop the strip from shearing freely), and a finer mesh mostly shifts it (a
+            // coarse strip is stiffer): first fit the stiffness c alone
             let rest = p[1..].to_vec();
             let mut scale = vec![p[0]];
             let one = OptimOptions {
