@@ -625,49 +625,33 @@ pub struct BendPoint {
     pub report: SolveReport,
 }
 
+/// A cantilever's model and platform clamp (see [`CantileverBend::clamped`]).
+struct Clamped {
+    model: ShellModel,
+    fixed: Vec<bool>,
+    clamp: EdgeClamp,
+    edge: (usize, f64),
+    tip: (usize, f64),
+}
+
 impl BendRig {
     pub fn new(bend: &CantileverBend, material: &FabricMaterial) -> Result<Self, SceneError> {
-        positive("width", bend.width)?;
-        positive("overhang", bend.overhang)?;
-        let (nx, ny) = bend.mesh;
-        if ny < 2 {
-            return Err(SceneError::Input(
-                "the cantilever mesh needs at least 2 rows".into(),
-            ));
-        }
-        let mut model = build_model(
-            material,
-            bend.width,
-            bend.overhang,
-            bend.angle_deg,
-            bend.mesh,
-            bend.boundary,
-        )?;
-        let h = spacing(bend.width, bend.overhang, bend.mesh);
-        let clamp = edge_clamp(
-            &model,
-            bend.boundary,
-            bend.mesh,
-            h,
-            0,
-            1,
-            Hold::PositionAndSlope,
-        )?;
-        let mut fixed = vec![false; 3 * model.num_nodes()];
-        for &d in &clamp.fixed {
-            fixed[d] = true;
-        }
+        let Clamped {
+            mut model,
+            fixed,
+            clamp,
+            edge,
+            tip,
+        } = bend.clamped(material)?;
         let system = free_system(&model, &fixed, clamp.slaves)?;
         model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY]);
-        let mid = nx / 2;
-        let u = if nx % 2 == 0 { 0.0 } else { 0.5 };
         Ok(Self {
             bend: bend.clone(),
             model,
             system,
             equilibrium: None,
-            edge: (mid, u),
-            tip: ((ny - 1) * nx + mid, u),
+            edge,
+            tip,
         })
     }
 
@@ -836,7 +820,10 @@ impl CantileverBend {
         }
     }
 
-    pub fn run(&self, material: &FabricMaterial) -> Result<BendResult, SceneError> {
+    /// The model on its mesh with the platform clamp (edge position and slope held), the
+    /// clamped DOFs marked, and the (face, u) of the mid-width points of the clamped edge
+    /// (v = 0) and of the tip (v = 1): what a single run and the fitter's rig share.
+    fn clamped(&self, material: &FabricMaterial) -> Result<Clamped, SceneError> {
         positive("width", self.width)?;
         positive("overhang", self.overhang)?;
         let (nx, ny) = self.mesh;
@@ -845,7 +832,7 @@ impl CantileverBend {
                 "the cantilever mesh needs at least 2 rows".into(),
             ));
         }
-        let mut model = build_model(
+        let model = build_model(
             material,
             self.width,
             self.overhang,
@@ -853,7 +840,6 @@ impl CantileverBend {
             self.mesh,
             self.boundary,
         )?;
-        let nn = model.num_nodes();
         let h = spacing(self.width, self.overhang, self.mesh);
         let clamp = edge_clamp(
             &model,
@@ -864,10 +850,31 @@ impl CantileverBend {
             1,
             Hold::PositionAndSlope,
         )?;
-        let mut fixed = vec![false; 3 * nn];
+        let mut fixed = vec![false; 3 * model.num_nodes()];
         for &d in &clamp.fixed {
             fixed[d] = true;
         }
+        let mid = nx / 2;
+        let u = if nx % 2 == 0 { 0.0 } else { 0.5 };
+        Ok(Clamped {
+            model,
+            fixed,
+            clamp,
+            edge: (mid, u),
+            tip: ((ny - 1) * nx + mid, u),
+        })
+    }
+
+    pub fn run(&self, material: &FabricMaterial) -> Result<BendResult, SceneError> {
+        let (nx, ny) = self.mesh;
+        let Clamped {
+            mut model,
+            mut fixed,
+            clamp,
+            edge,
+            tip,
+        } = self.clamped(material)?;
+        let nn = model.num_nodes();
         let clamp_slaves = clamp.slaves.clone();
         let mut slaves = clamp.slaves;
         if self.in_plane {
@@ -931,16 +938,14 @@ impl CantileverBend {
             None
         };
         let surface = model.basis.surface();
-        let mid = nx / 2;
-        let (face_edge, u_edge) = if nx % 2 == 0 { (mid, 0.0) } else { (mid, 0.5) };
-        let eval = |face: usize, u: f64, v: f64| -> Result<Vec3, SceneError> {
+        let eval = |(face, u): (usize, f64), v: f64| -> Result<Vec3, SceneError> {
             let s = surface
                 .stencil(face, u, v)
                 .map_err(|e| SceneError::Basis(e.into()))?;
             Ok(s.apply(&x).x())
         };
-        let edge = eval(face_edge, u_edge, 0.0)?;
-        let tip = eval((ny - 1) * nx + face_edge, u_edge, 1.0)?;
+        let edge = eval(edge, 0.0)?;
+        let tip = eval(tip, 1.0)?;
         let angle = (-(tip[2] - edge[2])).atan2(tip[1] - edge[1]).to_degrees();
         Ok(BendResult {
             drape_angle_deg: angle,
