@@ -722,10 +722,12 @@ impl Fitter<'_> {
             // coarse strip is stiffer): first fit the stiffness c alone
             let rest = p[1..].to_vec();
             let mut scale = vec![p[0]];
+            // on finer levels the shift is small and nearly uniform: one or two steps
+            let first = level == self.opts.ladder[0];
             let one = OptimOptions {
                 method: Method::GaussNewton,
-                max_iterations: 10,
-                rel_decrease: 1e-2,
+                max_iterations: if first { 10 } else { 2 },
+                rel_decrease: if first { 1e-2 } else { 0.05 },
                 ..opts
             };
             minimize(&mut scale, &one, |q: &[f64], jac: bool| {
