@@ -320,6 +320,19 @@ mod tests {
         ])
     }
 
+    /// A curved rest point with the warp off the surface axes.
+    fn sample_rest() -> RestPoint {
+        let d = [
+            [0.0; 3],
+            [1.0, 0.1, 0.0],
+            [0.2, 0.9, 0.1],
+            [0.0, 0.1, 0.3],
+            [0.1, 0.0, -0.2],
+            [0.0; 3],
+        ];
+        RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap()
+    }
+
     /// Gradients against central differences of the values, and the weighted Hessian
     /// (weights s) against central differences of the weighted gradients.
     fn check_jet(f: impl Fn(&YVec) -> StrainJet, hess: impl Fn(&YVec, &[f64; 3], &mut YMat)) {
@@ -367,15 +380,7 @@ mod tests {
 
     #[test]
     fn weighted_hessian_in_the_material_frame_matches_differences() {
-        let d = [
-            [0.0; 3],
-            [1.0, 0.1, 0.0],
-            [0.2, 0.9, 0.1],
-            [0.0, 0.1, 0.3],
-            [0.1, 0.0, -0.2],
-            [0.0; 3],
-        ];
-        let rest = RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap();
+        let rest = sample_rest();
         let (n, mo) = (Vector3::new(0.3, -0.8, 1.1), Vector3::new(-0.5, 0.2, 0.9));
         let combined = |y: &YVec| {
             let (m, b) = rest.strains(y);
@@ -396,15 +401,7 @@ mod tests {
 
     #[test]
     fn strain_values_agree_with_the_jets() {
-        let d = [
-            [0.0; 3],
-            [1.0, 0.1, 0.0],
-            [0.2, 0.9, 0.1],
-            [0.0, 0.1, 0.3],
-            [0.1, 0.0, -0.2],
-            [0.0; 3],
-        ];
-        let rest = RestPoint::new(&d, 1.0, [1.0, 0.3, 0.0]).unwrap();
+        let rest = sample_rest();
         let y = sample_y();
         let (m, b) = rest.strains(&y);
         let (em, eb) = rest.strain_values(&y);
