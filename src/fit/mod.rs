@@ -367,18 +367,12 @@ struct Fitter<'a> {
     rigs: std::collections::HashMap<RigKey, StripRig>,
     /// forces already predicted, by strip and parameter bits
     predictions: std::collections::HashMap<(RigKey, Vec<u64>), Vec<f64>>,
-    /// rms relative error of each tensile stage's last fit (any level)
-    stage_errors: std::collections::HashMap<&'static str, f64>,
 }
 
 /// Newton iterations a trial point's cold solve may take after its warm start failed (cold
 /// solves of the bundled fabrics take 3–10 iterations, 20–60 where the strip wrinkles; trial
 /// points far from the fit took up to 500 and still failed).
 const TRIAL_RETRY_ITERATIONS: usize = 100;
-
-/// A finer level's polish that ends this many times worse than the last level's fit refits
-/// the stiffness alone and polishes again.
-const PREFIT_GROWTH: f64 = 2.0;
 
 /// Strips cut within this many degrees of each other share warm starts.
 const NEAR_ANGLE_DEG: f64 = 1.5;
@@ -722,60 +716,35 @@ impl Fitter<'_> {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
             source,
         };
-        // The homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
-        // jaws stop the strip from shearing freely): on the first level the stiffness c is
-        // fitted alone first. A finer mesh mostly shifts the stiffness (a coarse strip is
-        // stiffer; the bias fits start near 5 % off on 16×24). The polish usually absorbs that;
-        // where it stalls with the error still over PREFIT_GROWTH times the last level's, c is
-        // refitted alone and the polish run again.
-        let first = level == self.opts.ladder[0];
-        let last = self.stage_errors.get(map.dir.name()).copied();
-        let mut prefit = first || last.is_none();
-        let rep = loop {
-            if prefit {
-                let rest = p[1..].to_vec();
-                let mut scale = vec![p[0]];
-                let one = OptimOptions {
-                    method: Method::GaussNewton,
-                    max_iterations: if first { 10 } else { 2 },
-                    rel_decrease: if first { 1e-2 } else { 0.05 },
-                    ..opts
-                };
-                minimize(&mut scale, &one, |q: &[f64], jac: bool| {
-                    let mut full = vec![q[0]];
-                    full.extend(&rest);
-                    let e = problem(&full, jac)?;
-                    Ok(Evaluation {
-                        residuals: e.residuals,
-                        jacobian: e.jacobian.map(|j| j.columns(0, 1).into_owned()),
-                    })
+        if level == self.opts.ladder[0] {
+            // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
+            // jaws stop the strip from shearing freely): first fit the stiffness c alone
+            let rest = p[1..].to_vec();
+            let mut scale = vec![p[0]];
+            let one = OptimOptions {
+                method: Method::GaussNewton,
+                max_iterations: 10,
+                rel_decrease: 1e-2,
+                ..opts
+            };
+            minimize(&mut scale, &one, |q: &[f64], jac: bool| {
+                let mut full = vec![q[0]];
+                full.extend(&rest);
+                let e = problem(&full, jac)?;
+                Ok(Evaluation {
+                    residuals: e.residuals,
+                    jacobian: e.jacobian.map(|j| j.columns(0, 1).into_owned()),
                 })
-                .map_err(fail)?;
-                p[0] = scale[0];
-            }
-            let rep = minimize(&mut p, &opts, &mut problem).map_err(fail)?;
-            let err = (rep.objective / points.len() as f64).sqrt();
-            match last {
-                Some(last) if !prefit && err > PREFIT_GROWTH * last => {
-                    self.say(&format!(
-                        "{} on {}×{}: the polish stalled at {:.3} % rms (last level {:.3} %); the stiffness alone, then the polish again",
-                        map.dir.name(),
-                        level.0,
-                        level.1,
-                        100.0 * err,
-                        100.0 * last
-                    ));
-                    prefit = true;
-                }
-                _ => break rep,
-            }
-        };
+            })
+            .map_err(fail)?;
+            p[0] = scale[0];
+        }
+        let rep = minimize(&mut p, &opts, problem).map_err(fail)?;
         self.stats.evaluations += evals;
         self.stats.newton_iterations += newton;
         map.decode(&p, &mut self.law);
         let newton = newton;
         let err = (rep.objective / points.len() as f64).sqrt();
-        self.stage_errors.insert(map.dir.name(), err);
         let msg = format!(
             "{} stage, degree {}, mesh {}×{}: rms relative error {:.3} % after {} iterations, {} evaluations, {} Newton iterations ({})",
             map.dir.name(),
@@ -893,7 +862,6 @@ impl Fitter<'_> {
         }
         let (err, law, range) = best.expect("one candidate at least");
         self.law = law;
-        self.stage_errors.insert(map.dir.name(), err);
         Ok((err, range))
     }
 
@@ -1160,7 +1128,6 @@ pub fn fit(
         bend_angles: Vec::new(),
         rigs: Default::default(),
         predictions: Default::default(),
-        stage_errors: Default::default(),
     };
     let pts = |t: &Option<TensileTest>| t.as_ref().map(|t| fit_points(t, opts.max_points));
     let (wp, fp, bp) = (pts(&warp), pts(&weft), pts(&bias));
