@@ -181,6 +181,8 @@ pub fn synthesize(
         thickness: material.thickness,
         tensile,
         bend,
+        known: Default::default(),
+        notes: Vec::new(),
     })
 }
 
@@ -242,14 +244,14 @@ fn synth_tensile(
                 t0.elapsed().as_secs_f64(),
                 start.elapsed().as_secs_f64()
             ));
-            tensile.push(TensileTest {
-                angle_deg: angle,
+            tensile.push(TensileTest::new(
+                angle,
                 width,
-                gauge_length: gauge,
-                curve: PathBuf::from(format!("{stem}-{r}.csv")),
-                elongation: elongations.clone(),
+                gauge,
+                PathBuf::from(format!("{stem}-{r}.csv")),
+                elongations.clone(),
                 force,
-            });
+            ));
         }
     }
     Ok(tensile)

@@ -88,6 +88,8 @@ fn noise_free_degree2_data_are_fitted_back() {
         "8x12",
         "--max-degree",
         "2",
+        "--protocol",
+        "paper",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
     assert!(err.contains("warp stage"), "progress on stderr: {err}");
@@ -119,8 +121,13 @@ fn noise_free_degree2_data_are_fitted_back() {
                 assert!((a - 41.5).abs() <= 0.2, "bend {angle}°: {a}°");
             }
             "validation" => {
-                assert!(t["misalign_deg"].as_float().unwrap().abs() <= 5.0);
-                assert!(t["avg_rel_error"].as_float().unwrap() < 0.1);
+                // noise-free data cut at the nominal angle: the prediction at that angle is
+                // the reported error, and the diagnostic stays inside its ±2° bound
+                assert!(t["misalign_deg"].as_float().unwrap().abs() <= 2.0);
+                let e = t["avg_rel_error"].as_float().unwrap();
+                let aligned = t["avg_rel_error_aligned"].as_float().unwrap();
+                assert!(e < 0.02, "validation {angle}°: {e}");
+                assert!(aligned <= e + 1e-9, "validation {angle}°: {aligned} > {e}");
             }
             other => panic!("unknown kind {other}"),
         }
@@ -161,7 +168,9 @@ fn datasets_without_warp_or_weft_are_refused() {
     ]);
     assert_eq!(rc, 2, "{out}{err}");
     assert!(
-        err.contains("no warp (90°) or weft (0°) tensile test"),
+        err.contains(
+            "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa"
+        ),
         "{err}"
     );
     let (rc, _, err) = ks_fit(&["fit", s(&dir.join("missing.toml"))]);

@@ -121,6 +121,25 @@ enum Command {
         /// No progress lines.
         #[arg(long)]
         quiet: bool,
+        /// Which tests are fitted: `all` (every angle unless its `role` says validation) or
+        /// `paper` (0°, 45° and 90° fitted, the rest validation, as in Clyde et al. 2017).
+        #[arg(long, default_value = "all", value_parser = ["all", "paper"])]
+        protocol: String,
+        /// Toe compensation: `auto` (detect slack and preload, remove them, report `toe_mm`)
+        /// or `none`; a test's own `toe_mm` key wins over both.
+        #[arg(long, value_enum, default_value = "auto")]
+        toe: kshell::fit::ToeMode,
+        /// Repeats fitted: `all` (each curve weighted alike) or `largest` (the paper's choice:
+        /// the largest forces for warp and weft, the median for other angles).
+        #[arg(long, value_enum, default_value = "all")]
+        repeat: kshell::fit::RepeatMode,
+        /// Bound of the misalignment diagnostic of validation runs, degrees (0: off). The
+        /// reported error is always the one at the nominal angle.
+        #[arg(long, default_value_t = 2.0)]
+        max_misalign: f64,
+        /// Elongation nodes per strip at which the model is solved (interpolated between).
+        #[arg(long, default_value_t = 10)]
+        nodes: usize,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -337,16 +356,23 @@ fn main() -> ExitCode {
             mesh_ladder,
             method,
             quiet,
-        } => cmd_fit(
-            &file,
-            output.as_deref(),
-            report.as_deref(),
+            protocol,
+            toe,
+            repeat,
+            max_misalign,
+            nodes,
+        } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
             &mesh_ladder,
             method,
-            quiet,
-        ),
+            &protocol,
+            toe,
+            repeat,
+            max_misalign,
+            nodes,
+        )
+        .and_then(|opts| cmd_fit(&file, output.as_deref(), report.as_deref(), &opts, quiet)),
         Command::Synth {
             material,
             out,
@@ -814,40 +840,64 @@ fn cmd_demo() -> Result<(), String> {
     Ok(())
 }
 
+/// The fit's settings from its flags, checked.
 #[allow(clippy::too_many_arguments)]
-fn cmd_fit(
-    file: &std::path::Path,
-    output: Option<&std::path::Path>,
-    report: Option<&std::path::Path>,
+fn fit_options(
     max_degree: usize,
     fixed_degree: Option<usize>,
     mesh_ladder: &str,
     method: kshell::fit::optim::Method,
-    quiet: bool,
-) -> Result<(), String> {
-    use kshell::fit::{fit, report as fit_report, FitOptions};
-    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
-    for w in &warnings {
-        eprintln!("ks-fit: {w}");
-    }
+    protocol: &str,
+    toe: kshell::fit::ToeMode,
+    repeats: kshell::fit::RepeatMode,
+    max_misalign: f64,
+    nodes: usize,
+) -> Result<kshell::fit::FitOptions, String> {
     if max_degree == 0 || fixed_degree == Some(0) {
         return Err("degrees start at 1 (--max-degree, --degree)".into());
     }
+    if !(0.0..=15.0).contains(&max_misalign) {
+        return Err(format!(
+            "--max-misalign must be in [0, 15] degrees, got {max_misalign}"
+        ));
+    }
+    if !(4..=200).contains(&nodes) {
+        return Err(format!("--nodes must be in [4, 200], got {nodes}"));
+    }
     let ladder =
         kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
-    let opts = FitOptions {
+    Ok(kshell::fit::FitOptions {
         max_degree,
         fixed_degree,
         ladder,
         method,
-        ..FitOptions::default()
-    };
+        paper_protocol: protocol == "paper",
+        toe,
+        repeats,
+        max_misalign_deg: max_misalign,
+        nodes,
+        ..kshell::fit::FitOptions::default()
+    })
+}
+
+fn cmd_fit(
+    file: &std::path::Path,
+    output: Option<&std::path::Path>,
+    report: Option<&std::path::Path>,
+    opts: &kshell::fit::FitOptions,
+    quiet: bool,
+) -> Result<(), String> {
+    use kshell::fit::{fit, report as fit_report};
+    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    for w in &warnings {
+        eprintln!("ks-fit: {w}");
+    }
     let mut progress = |line: &str| {
         if !quiet {
             eprintln!("ks-fit: fit: {line}");
         }
     };
-    let result = fit(&data, &opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
+    let result = fit(&data, opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
     let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
         PathBuf::from(format!(
             "{}-fit.toml",
@@ -870,6 +920,9 @@ fn cmd_fit(
     }
     for line in result.degree_log.iter().chain(&result.notes) {
         println!("{line}");
+    }
+    for line in &result.identifiability {
+        println!("identifiability: {line}");
     }
     print!("{}", fit_report::table(&result));
     let stages: Vec<String> = result

@@ -37,6 +37,8 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     );
     let notes: Vec<String> = r.notes.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "notes = [{}]", notes.join(", "));
+    let ident: Vec<String> = r.identifiability.iter().map(|n| toml_str(n)).collect();
+    let _ = writeln!(s, "identifiability = [{}]", ident.join(", "));
     let log: Vec<String> = r.degree_log.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "degree_choice = [{}]", log.join(", "));
     let _ = writeln!(s, "\n[fit.stage_seconds]");
@@ -50,8 +52,20 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         if let Some(c) = &t.curve {
             let _ = writeln!(s, "curve = {}", toml_str(c));
         }
+        if let Some(k) = t.repeat {
+            let _ = writeln!(s, "repeat = {k}");
+        }
         if let Some(e) = t.avg_rel_error {
             let _ = writeln!(s, "avg_rel_error = {e:.6}");
+        }
+        if let Some(e) = t.avg_rel_error_aligned {
+            let _ = writeln!(s, "avg_rel_error_aligned = {e:.6}");
+        }
+        if let Some(toe) = t.toe {
+            let _ = writeln!(s, "toe_mm = {:.4}", toe * 1e3);
+        }
+        if !t.points.is_empty() {
+            let _ = writeln!(s, "points = {}", t.points.len());
         }
         if let Some(a) = t.drape_angle_deg {
             let _ = writeln!(s, "drape_angle_deg = {a:.4}");
@@ -70,14 +84,22 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
 /// The per-test table printed at the end of a fit.
 pub fn table(r: &FitResult) -> String {
     let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13}\n",
-        "kind", "angle", "curve", "avg_rel_error", "drape_angle_deg", "misalign_deg"
+        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>6}\n",
+        "kind",
+        "angle",
+        "curve",
+        "avg_rel_error",
+        "drape_angle_deg",
+        "misalign_deg",
+        "aligned_error",
+        "toe_mm",
+        "fitted"
     );
     for t in &r.tests {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
         let _ = writeln!(
             s,
-            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13}",
+            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>6}",
             t.kind,
             t.angle_deg,
             t.curve.as_deref().unwrap_or("-"),
@@ -87,6 +109,9 @@ pub fn table(r: &FitResult) -> String {
                 _ => "-".into(),
             },
             opt(t.misalign_deg, &|m| format!("{m:+.2}")),
+            opt(t.avg_rel_error_aligned, &|e| format!("{:.2} %", 100.0 * e)),
+            opt(t.toe, &|m| format!("{:.3}", m * 1e3)),
+            if t.used_in_fit { "yes" } else { "no" },
         );
     }
     s
@@ -110,6 +135,20 @@ pub fn curve_csv(t: &TestOutcome) -> String {
         let _ = writeln!(s, "{},{},{},{}", e * 1e3, m, f, (f - m) / m);
     }
     s
+}
+
+/// A tick label: at most four significant digits, no float noise (not `9.99999e-5`).
+fn tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 9) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// SVG: measured (dashed) and fitted (solid) force against elongation, the full range on the
@@ -149,6 +188,8 @@ pub fn curve_svg(t: &TestOutcome, title: &str) -> Result<String, String> {
                 .configure_mesh()
                 .x_desc("elongation (mm)")
                 .y_desc("force (N)")
+                .x_label_formatter(&|v| tick(*v))
+                .y_label_formatter(&|v| tick(*v))
                 .draw()
                 .map_err(|e| e.to_string())?;
             let measured: Vec<(f64, f64)> = inside.iter().map(|p| (p.0 * 1e3, p.1)).collect();
@@ -173,6 +214,7 @@ pub fn curve_svg(t: &TestOutcome, title: &str) -> Result<String, String> {
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
             chart
                 .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
                 .border_style(BLACK)
                 .background_style(WHITE)
                 .draw()

@@ -173,8 +173,16 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
     let a11 = check("a11_pa", raw.a11_pa, false)?;
     let a22 = check("a22_pa", raw.a22_pa, false)?;
     let g12 = check("g12_pa", raw.g12_pa, false)?;
+    // a12 may be negative (a negative Poisson coupling); convexity is the only bound
     let a12 = match raw.a12_pa {
-        Some(v) => check("a12_pa", v, true)?,
+        Some(v) if v.is_finite() => v,
+        Some(v) => {
+            return Err(err(
+                None,
+                "a12_pa",
+                format!("a12_pa must be a finite number, got {v}"),
+            ))
+        }
         None => 0.5 * a11.min(a22),
     };
     if a12 * a12 >= a11 * a22 {

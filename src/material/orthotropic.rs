@@ -40,7 +40,7 @@ impl Eta {
 
     /// η, η', η'' at x ≥ 0 (`None` if not finite). (x + 1)^α − 1 is evaluated as
     /// expm1(α ln1p(x)), without the cancellation that would cost small strains their digits.
-    fn eval(&self, x: f64) -> Option<[f64; 3]> {
+    pub(crate) fn eval(&self, x: f64) -> Option<[f64; 3]> {
         let b = x + 1.0;
         let l = x.ln_1p();
         let mut out = [0.0; 3];

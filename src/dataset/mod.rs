@@ -33,6 +33,9 @@
 //! although the curve reaches 1 % strain (woven fabrics carry tens to hundreds of newtons
 //! there); a curve file used by two tests; a dataset with no tests.
 
+mod curve;
+
+use curve::{parse_curve, Curve};
 use serde::Deserialize;
 use std::fmt;
 use std::ops::Range;
@@ -58,6 +61,19 @@ struct RawDataset {
     tensile: Vec<Spanned<RawTensile>>,
     #[serde(default)]
     bend: Vec<Spanned<RawBend>>,
+    known: Option<RawKnown>,
+}
+
+/// Values the lab knows from elsewhere; the fit holds them.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawKnown {
+    a11_pa: Option<Spanned<f64>>,
+    a22_pa: Option<Spanned<f64>>,
+    a12_pa: Option<Spanned<f64>>,
+    g12_pa: Option<Spanned<f64>>,
+    thickness_mm: Option<Spanned<f64>>,
+    poisson_12: Option<Spanned<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -67,6 +83,10 @@ struct RawTensile {
     width_mm: Spanned<f64>,
     gauge_length_mm: Spanned<f64>,
     curve: Spanned<String>,
+    role: Option<Spanned<String>>,
+    force_scale: Option<Spanned<f64>>,
+    toe_mm: Option<Spanned<f64>>,
+    columns: Option<Spanned<Vec<String>>>,
 }
 
 #[derive(Deserialize)]
@@ -90,6 +110,36 @@ pub struct FabricDataset {
     pub thickness: f64,
     pub tensile: Vec<TensileTest>,
     pub bend: Vec<BendTest>,
+    /// values known from elsewhere, held by the fit (`[known]`)
+    pub known: Known,
+    /// what the reader did to the data (averaged duplicates, units read from headers)
+    pub notes: Vec<String>,
+}
+
+/// Values known from elsewhere (`[known]` in fabric.toml), in SI units; the fit holds them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Known {
+    pub a11: Option<f64>,
+    pub a22: Option<f64>,
+    pub a12: Option<f64>,
+    pub g12: Option<f64>,
+    /// m
+    pub thickness: Option<f64>,
+    /// ν12 = a12 / a22 (a measured Poisson ratio pins a12)
+    pub poisson_12: Option<f64>,
+}
+
+impl Known {
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
+/// Whether a tensile test is fitted or only predicted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    Fit,
+    Validation,
 }
 
 /// One ASTM D5035 strip test.
@@ -105,8 +155,18 @@ pub struct TensileTest {
     pub curve: PathBuf,
     /// m, non-negative, strictly increasing
     pub elongation: Vec<f64>,
-    /// N, non-negative
+    /// N (after `force_scale`); noise may dip below zero by 1 % of the largest force
     pub force: Vec<f64>,
+    /// `role` as written; `None`: the protocol decides (every angle fitted by default)
+    pub role: Option<Role>,
+    /// the toe (slack or preload) to remove, m, when given (`toe_mm`); `None`: automatic
+    pub toe: Option<f64>,
+    /// the factor the curve's forces were multiplied by (`force_scale`, default 1)
+    pub force_scale: f64,
+    /// `columns` as written: the elongation and force columns' header names
+    pub columns: Option<[String; 2]>,
+    /// the forces look like kN (tiny for the strip's width) and no `force_scale` was given
+    pub suspect_kn: bool,
 }
 
 /// One ASTM D1388 cantilever: the overhang at which the tip reaches the drape angle.
@@ -165,11 +225,45 @@ impl FabricDataset {
 }
 
 impl TensileTest {
-    /// Whether the staged fit uses this test (0°, 45°, 90°); other angles validate the fit.
+    /// A test with the default options (role by protocol, automatic toe, no force scale).
+    pub fn new(
+        angle_deg: f64,
+        width: f64,
+        gauge_length: f64,
+        curve: PathBuf,
+        elongation: Vec<f64>,
+        force: Vec<f64>,
+    ) -> Self {
+        Self {
+            angle_deg,
+            width,
+            gauge_length,
+            curve,
+            elongation,
+            force,
+            role: None,
+            toe: None,
+            force_scale: 1.0,
+            columns: None,
+            suspect_kn: false,
+        }
+    }
+
+    /// Whether the paper's protocol fits this test (0°, 45°, 90°); other angles validate it.
     pub fn is_fitted(&self) -> bool {
         FITTED_ANGLES_DEG
             .iter()
             .any(|a| (self.angle_deg - a).abs() < 1e-9)
+    }
+
+    /// The test's role: as written, else fitted (`paper = false`, every angle) or by the
+    /// paper's split (`paper = true`: 0°, 45°, 90° fitted, the rest validation).
+    pub fn role(&self, paper: bool) -> Role {
+        match self.role {
+            Some(r) => r,
+            None if !paper || self.is_fitted() => Role::Fit,
+            None => Role::Validation,
+        }
     }
 }
 
@@ -231,103 +325,6 @@ impl Toml<'_> {
     }
 }
 
-/// A curve in lab units with each row's line.
-struct Curve {
-    elongation_mm: Vec<f64>,
-    force_n: Vec<f64>,
-    lines: Vec<usize>,
-}
-
-/// Parses curve CSV; `file` names it in errors.
-fn parse_curve(text: &str, file: &str) -> Result<Curve, DatasetError> {
-    let err = |line: usize, message: String| DatasetError {
-        file: file.to_string(),
-        line: Some(line),
-        message,
-    };
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
-        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-    let Some((header_line, header)) = rows.next() else {
-        return Err(err(
-            1,
-            format!("empty curve file: expected the header `{CURVE_HEADER}`"),
-        ));
-    };
-    let fields: Vec<&str> = header.split(',').map(str::trim).collect();
-    if fields != ["elongation_mm", "force_n"] {
-        return Err(err(
-            header_line,
-            format!("the header must be `{CURVE_HEADER}`, got `{header}`"),
-        ));
-    }
-    let columns = ["elongation_mm", "force_n"];
-    let mut c = Curve {
-        elongation_mm: Vec::new(),
-        force_n: Vec::new(),
-        lines: Vec::new(),
-    };
-    for (line, row) in rows {
-        let fields: Vec<&str> = row.split(',').map(str::trim).collect();
-        if fields.len() != 2 {
-            return Err(err(
-                line,
-                format!(
-                    "expected 2 columns ({CURVE_HEADER}), got {}: `{row}`",
-                    fields.len()
-                ),
-            ));
-        }
-        let mut v = [0.0; 2];
-        for (k, (field, name)) in fields.iter().zip(columns).enumerate() {
-            let col = k + 1;
-            if field.is_empty() {
-                return Err(err(line, format!("column {col} ({name}) is empty")));
-            }
-            let x: f64 = field.parse().map_err(|_| {
-                err(
-                    line,
-                    format!("column {col} ({name}): `{field}` is not a number"),
-                )
-            })?;
-            if !x.is_finite() {
-                return Err(err(
-                    line,
-                    format!("column {col} ({name}) must be finite, got {field}"),
-                ));
-            }
-            if x < 0.0 {
-                return Err(err(
-                    line,
-                    format!("column {col} ({name}) must not be negative, got {field}"),
-                ));
-            }
-            v[k] = x;
-        }
-        if let Some(&prev) = c.elongation_mm.last() {
-            if v[0] <= prev {
-                return Err(err(
-                    line,
-                    format!(
-                        "column 1 (elongation_mm) = {} does not exceed the previous row's {prev}: elongation must increase strictly",
-                        v[0]
-                    ),
-                ));
-            }
-        }
-        c.elongation_mm.push(v[0]);
-        c.force_n.push(v[1]);
-        c.lines.push(line);
-    }
-    if c.lines.is_empty() {
-        return Err(err(header_line, "no data rows after the header".into()));
-    }
-    Ok(c)
-}
-
 /// Warnings about one tensile curve (lab units).
 fn curve_warnings(
     c: &Curve,
@@ -380,6 +377,84 @@ fn curve_warnings(
     }
 }
 
+/// Largest curve file read (a million rows of a machine export are about 40 MB).
+const MAX_CURVE_BYTES: u64 = 256 << 20;
+
+/// A curve file's text: regular files only (not a FIFO or a device), of bounded size.
+fn read_curve_file(path: &Path) -> Result<String, String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > MAX_CURVE_BYTES {
+        return Err(format!(
+            "{} bytes, more than the {} MiB a curve may have",
+            meta.len(),
+            MAX_CURVE_BYTES >> 20
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_string())
+}
+
+/// The `[known]` table in SI units.
+fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
+    let Some(k) = raw else {
+        return Ok(Known::default());
+    };
+    let pos =
+        |key: &str, v: &Option<Spanned<f64>>, scale: f64| -> Result<Option<f64>, DatasetError> {
+            v.as_ref()
+                .map(|v| t.positive("[known] ", key, v, scale))
+                .transpose()
+        };
+    let a12 = match &k.a12_pa {
+        Some(v) if !v.get_ref().is_finite() => {
+            return Err(t.err(
+                v.span(),
+                format!("[known] a12_pa must be finite, got {}", v.get_ref()),
+            ))
+        }
+        v => v.as_ref().map(|v| *v.get_ref()),
+    };
+    let poisson_12 = match &k.poisson_12 {
+        Some(v) if !(v.get_ref().is_finite() && v.get_ref().abs() < 1.0) => {
+            return Err(t.err(
+                v.span(),
+                format!("[known] poisson_12 must be in (-1, 1), got {}", v.get_ref()),
+            ))
+        }
+        v => v.as_ref().map(|v| *v.get_ref()),
+    };
+    let known = Known {
+        a11: pos("a11_pa", &k.a11_pa, 1.0)?,
+        a22: pos("a22_pa", &k.a22_pa, 1.0)?,
+        a12,
+        g12: pos("g12_pa", &k.g12_pa, 1.0)?,
+        thickness: pos("thickness_mm", &k.thickness_mm, 1e-3)?,
+        poisson_12,
+    };
+    if let (Some(a11), Some(a22), Some(a12)) = (known.a11, known.a22, known.a12) {
+        if a12 * a12 >= a11 * a22 {
+            let span = k.a12_pa.as_ref().map_or(0..0, |v| v.span());
+            return Err(t.err(
+                span,
+                format!(
+                    "[known] a12_pa = {a12} breaks a12² < a11·a22 (the law would not be convex)"
+                ),
+            ));
+        }
+    }
+    if known.a12.is_some() && known.poisson_12.is_some() {
+        let span = k.poisson_12.as_ref().map_or(0..0, |v| v.span());
+        return Err(t.err(
+            span,
+            "[known] give a12_pa or poisson_12, not both (ν12 = a12/a22)".into(),
+        ));
+    }
+    Ok(known)
+}
+
 /// Reads and checks a dataset: `fabric.toml` and the curves it names (relative to its folder).
 pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>), DatasetError> {
     let file = path.display().to_string();
@@ -404,6 +479,8 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
         Some(v) => Some(t.positive("", "areal_density_g_m2", v, 1e-3)?),
         None => None,
     };
+    let known = read_known(&t, raw.known.as_ref())?;
+    let mut notes = Vec::new();
     let mut tensile = Vec::with_capacity(raw.tensile.len());
     let mut used: Vec<(PathBuf, usize)> = Vec::new();
     for (i, spanned) in raw.tensile.iter().enumerate() {
@@ -415,13 +492,57 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
         let curve = PathBuf::from(r.curve.get_ref());
         let csv_path = dir.join(&curve);
         let csv_name = csv_path.display().to_string();
-        let csv = std::fs::read_to_string(&csv_path).map_err(|e| {
+        let columns = match &r.columns {
+            None => None,
+            Some(c) => match c.get_ref().as_slice() {
+                [a, b] => Some([a.clone(), b.clone()]),
+                _ => {
+                    return Err(t.err(
+                        c.span(),
+                        format!("{what}columns must name two columns: [elongation, force]"),
+                    ))
+                }
+            },
+        };
+        let role = match &r.role {
+            None => None,
+            Some(v) => match v.get_ref().as_str() {
+                "fit" => Some(Role::Fit),
+                "validation" => Some(Role::Validation),
+                other => {
+                    return Err(t.err(
+                        v.span(),
+                        format!("{what}role must be \"fit\" or \"validation\", got {other:?}"),
+                    ))
+                }
+            },
+        };
+        let force_scale = match &r.force_scale {
+            Some(v) => t.positive(&what, "force_scale", v, 1.0)?,
+            None => 1.0,
+        };
+        let toe = match &r.toe_mm {
+            None => None,
+            Some(v) => {
+                let x = *v.get_ref();
+                if !x.is_finite() || x.abs() >= gauge_length * 1e3 {
+                    return Err(t.err(
+                        v.span(),
+                        format!("{what}toe_mm must be a finite number smaller than the gauge length (negative for a preload), got {x}"),
+                    ));
+                }
+                Some(x * 1e-3)
+            }
+        };
+        let csv = read_curve_file(&csv_path).map_err(|m| {
             t.err(
                 r.curve.span(),
-                format!("{what}cannot read curve file {csv_name}: {e}"),
+                format!("{what}cannot read curve file {csv_name}: {m}"),
             )
         })?;
-        let c = parse_curve(&csv, &csv_name)?;
+        let mut c = parse_curve(&csv, &csv_name, columns.as_ref())?;
+        c.force_n.iter_mut().for_each(|f| *f *= force_scale);
+        let before = warnings.len();
         curve_warnings(
             &c,
             width * 1e3,
@@ -429,6 +550,26 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
             &csv_name,
             &mut warnings,
         );
+        let suspect_kn = r.force_scale.is_none()
+            && warnings[before..]
+                .iter()
+                .any(|w| w.message.contains("are the forces in kN?"));
+        if c.duplicates > 0 {
+            notes.push(format!(
+                "{csv_name}: {} rows repeated the elongation of the row before and were averaged into it",
+                c.duplicates
+            ));
+        }
+        if let Some(u) = &c.units {
+            notes.push(format!(
+                "{csv_name}: read the columns {u}, converted to mm and N"
+            ));
+        }
+        if force_scale != 1.0 {
+            notes.push(format!(
+                "{csv_name}: forces multiplied by force_scale = {force_scale}"
+            ));
+        }
         let line = line_of(&text, r.curve.span().start);
         if let Some((_, first)) = used.iter().find(|(p, _)| *p == curve) {
             warnings.push(DatasetWarning {
@@ -442,14 +583,20 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
         } else {
             used.push((curve.clone(), line));
         }
-        tensile.push(TensileTest {
+        let mut test = TensileTest::new(
             angle_deg,
             width,
             gauge_length,
             curve,
-            elongation: c.elongation_mm.iter().map(|e| e * 1e-3).collect(),
-            force: c.force_n,
-        });
+            c.elongation_mm.iter().map(|e| e * 1e-3).collect(),
+            c.force_n,
+        );
+        test.role = role;
+        test.toe = toe;
+        test.force_scale = force_scale;
+        test.columns = columns;
+        test.suspect_kn = suspect_kn;
+        tensile.push(test);
     }
     let mut bend = Vec::with_capacity(raw.bend.len());
     for (i, spanned) in raw.bend.iter().enumerate() {
@@ -501,6 +648,8 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
             thickness,
             tensile,
             bend,
+            known,
+            notes,
         },
         warnings,
     ))
@@ -529,6 +678,33 @@ pub fn dataset_toml(data: &FabricDataset, comment: &str) -> String {
         let _ = writeln!(s, "width_mm = {:?}", t.width * 1e3);
         let _ = writeln!(s, "gauge_length_mm = {:?}", t.gauge_length * 1e3);
         let _ = writeln!(s, "curve = {}", toml_string(&t.curve.to_string_lossy()));
+        match t.role {
+            Some(Role::Fit) => s.push_str("role = \"fit\"\n"),
+            Some(Role::Validation) => s.push_str("role = \"validation\"\n"),
+            None => {}
+        }
+        if t.force_scale != 1.0 {
+            let _ = writeln!(s, "force_scale = {:?}", t.force_scale);
+        }
+        if let Some(toe) = t.toe {
+            let _ = writeln!(s, "toe_mm = {:?}", toe * 1e3);
+        }
+    }
+    let k = &data.known;
+    if !k.is_empty() {
+        let _ = writeln!(s, "\n[known]");
+        for (key, v, scale) in [
+            ("a11_pa", k.a11, 1.0),
+            ("a22_pa", k.a22, 1.0),
+            ("a12_pa", k.a12, 1.0),
+            ("g12_pa", k.g12, 1.0),
+            ("thickness_mm", k.thickness, 1e3),
+            ("poisson_12", k.poisson_12, 1.0),
+        ] {
+            if let Some(v) = v {
+                let _ = writeln!(s, "{key} = {:?}", v * scale);
+            }
+        }
     }
     for b in &data.bend {
         let _ = writeln!(s, "\n[[bend]]");
@@ -540,11 +716,12 @@ pub fn dataset_toml(data: &FabricDataset, comment: &str) -> String {
     s
 }
 
-/// The CSV text of one curve (lab units, every number written to round-trip).
+/// The CSV text of one curve (lab units as `elongation_mm,force_n`, forces before
+/// `force_scale`, every number written to round-trip).
 pub fn curve_csv(t: &TensileTest) -> String {
     let mut s = format!("{CURVE_HEADER}\n");
     for (e, f) in t.elongation.iter().zip(&t.force) {
-        s.push_str(&format!("{:?},{:?}\n", e * 1e3, f));
+        s.push_str(&format!("{:?},{:?}\n", e * 1e3, f / t.force_scale));
     }
     s
 }
@@ -807,12 +984,20 @@ mod tests {
                 "warp-1.csv:2: column 1 (elongation_mm) must not be negative",
             ),
             (
-                "elongation_mm,force_n\n1,2\n\n1,3\n",
-                "warp-1.csv:4: column 1 (elongation_mm) = 1 does not exceed the previous row's 1",
+                "elongation_mm,force_n\n2,2\n1,3\n",
+                "warp-1.csv:3: column 1 (elongation_mm) = 1 is below the previous row's 2",
             ),
             (
-                "elongation_mm,force_n\n2,2\n1,3\n",
-                "warp-1.csv:3: column 1 (elongation_mm) = 1 does not exceed",
+                "\"Extension\",\"Load (N)\"\n1,2\n",
+                "warp-1.csv:1: the header must be `elongation_mm,force_n` or name an elongation and a force column with units, e.g. `\"Extension (mm)\",\"Load (N)\"`: column `Extension` has no unit",
+            ),
+            (
+                "Extension (furlong),Load (N)\n1,2\n",
+                "warp-1.csv:1: the header must be `elongation_mm,force_n` or name an elongation and a force column with units, e.g. `\"Extension (mm)\",\"Load (N)\"`: column `Extension (furlong)`: unknown length",
+            ),
+            (
+                "elongation_mm,force_n\n1,2\n2,-0.5\n3,4\n",
+                "warp-1.csv:3: column 2 (force_n) must not be negative, got -0.5",
             ),
         ];
         for (i, (csv, want)) in cases.iter().enumerate() {
@@ -825,6 +1010,119 @@ mod tests {
                 "{tail:?} should start with {want:?}"
             );
         }
+    }
+
+    #[test]
+    fn machine_exports_are_read_with_their_units() {
+        // metadata lines, quoted headers with units and other columns, then the data
+        let instron = "Test name: warp 1\nDate,2026-11-30\nLoad cell,extensometer\n\"Time (s)\",\"Extension (mm)\",\"Load (kN)\"\n0.0,0.0,0.0\n1.0,0.75,0.0205\n2.0,1.5,0.041\n";
+        let (d, w) = load("instron", TOML, Some(instron)).unwrap();
+        let t = &d.tensile[0];
+        assert_eq!(t.elongation, vec![0.0, 0.75e-3, 1.5e-3]);
+        assert!((t.force[1] - 20.5).abs() < 1e-12 && (t.force[2] - 41.0).abs() < 1e-12);
+        assert!(w.is_empty(), "{w:?}");
+        assert!(
+            d.notes
+                .iter()
+                .any(|n| n.contains("`Extension (mm)`, `Load (kN)`")),
+            "{:?}",
+            d.notes
+        );
+        // semicolons with decimal commas, inches and pound-force
+        let euro = "Extension [in];Kraft;Load [lbf]\n0,1;9;2,5\n0,2;9;5\n";
+        let (d, _) = load("euro", TOML, Some(euro)).unwrap();
+        let t = &d.tensile[0];
+        assert!((t.elongation[0] - 2.54e-3).abs() < 1e-15);
+        assert!((t.force[1] - 5.0 * 4.448_221_615_260_5).abs() < 1e-12);
+        // a header we do not recognise, named by `columns`
+        let odd = "Weg (mm),F (N)\n1,20\n2,40\n";
+        let toml = TOML.replace(
+            "curve = \"warp-1.csv\"",
+            "curve = \"warp-1.csv\"\ncolumns = [\"Weg (mm)\", \"F (N)\"]",
+        );
+        let (d, _) = load("columns", &toml, Some(odd)).unwrap();
+        assert_eq!(d.tensile[0].force, vec![20.0, 40.0]);
+        assert!(load("no-columns", TOML, Some(odd)).is_err());
+        // an extensometer's resolution: repeated elongations are averaged, with a note
+        let dup = "elongation_mm,force_n\n0.01,1\n0.01,2\n0.01,6\n0.02,8\n";
+        let (d, _) = load("dup", TOML, Some(dup)).unwrap();
+        assert_eq!(d.tensile[0].force, vec![3.0, 8.0]);
+        assert!(
+            d.notes.iter().any(|n| n.contains("2 rows repeated")),
+            "{:?}",
+            d.notes
+        );
+    }
+
+    #[test]
+    fn roles_scales_toes_and_known_values() {
+        let toml = TOML.replace(
+            "curve = \"warp-1.csv\"",
+            "curve = \"warp-1.csv\"\nrole = \"validation\"\nforce_scale = 0.5\ntoe_mm = -0.2",
+        ) + "\n[known]\na11_pa = 2e8\na12_pa = -1e7\nthickness_mm = 0.2\n";
+        let (d, _) = load("roles", &toml, Some(CSV)).unwrap();
+        let t = &d.tensile[0];
+        assert_eq!(t.role, Some(Role::Validation));
+        assert_eq!(t.role(false), Role::Validation);
+        assert_eq!(t.force, vec![10.25, 20.5, 40.0]);
+        assert_eq!(t.toe, Some(-0.2e-3));
+        assert_eq!(d.known.a11, Some(2e8));
+        assert_eq!(d.known.a12, Some(-1e7));
+        assert!((d.known.thickness.unwrap() - 2e-4).abs() < 1e-18);
+        // written and read back
+        let dir =
+            std::env::temp_dir().join(format!("kshell-dataset-{}-roles-w", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        write_dataset(&dir, &d).unwrap();
+        let (back, _) = load_dataset(&dir.join("fabric.toml")).unwrap();
+        assert_eq!(back.tensile[0].force, d.tensile[0].force);
+        assert_eq!(back.known, d.known);
+        assert_eq!(back.tensile[0].role, Some(Role::Validation));
+        // errors
+        for (bad, want) in [
+            ("role = \"maybe\"", "role must be \"fit\" or \"validation\""),
+            (
+                "force_scale = 0",
+                "force_scale must be a finite positive number",
+            ),
+            (
+                "toe_mm = 80",
+                "toe_mm must be a finite number smaller than the gauge length",
+            ),
+            ("columns = [\"a\"]", "columns must name two columns"),
+        ] {
+            let toml = TOML.replace(
+                "curve = \"warp-1.csv\"",
+                &format!("curve = \"warp-1.csv\"\n{bad}"),
+            );
+            let e = load("bad-keys", &toml, Some(CSV)).unwrap_err().to_string();
+            assert!(
+                e.contains("fabric.toml:10: tensile test 1: ") && e.contains(want),
+                "{e}"
+            );
+        }
+        for (bad, want) in [
+            (
+                "a11_pa = 1e8\na22_pa = 1e8\na12_pa = 2e8",
+                "breaks a12² < a11·a22",
+            ),
+            ("poisson_12 = 1.5", "poisson_12 must be in (-1, 1)"),
+            ("a12_pa = 1e6\npoisson_12 = 0.1", "not both"),
+            ("g12_pa = -3", "g12_pa must be a finite positive number"),
+            ("e_pa = 3", "unknown field `e_pa`"),
+        ] {
+            let e = load("bad-known", &format!("{TOML}\n[known]\n{bad}\n"), Some(CSV))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(want), "{e}");
+        }
+    }
+
+    #[test]
+    fn curve_files_must_be_regular_files() {
+        let toml = TOML.replace("warp-1.csv", ".");
+        let e = load("dir-curve", &toml, Some(CSV)).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
     }
 
     #[test]

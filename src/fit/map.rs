@@ -1,0 +1,245 @@
+//! The map between a stage's variables p and the law (paper §5 stages 2, 3 and 5).
+//!
+//! A stage fits one η and its stiffness c (a11 for warp, a22 for weft, G12 for shear). Its
+//! variables are O(1): ln c (absent when c is known), μ₂…μ_d (μ₁ = 1 − Σ the others) and
+//! β = α x̂ with x̂ the largest tested value of η's argument, so that β ≈ 1 is where η bends.
+//! a12 follows its rule ([`A12Rule`]) whenever a11 or a22 changes.
+
+use crate::material::{Eta, Orthotropic};
+
+/// Which η and stiffness a stage fits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    Warp,
+    Weft,
+    Shear,
+}
+
+impl Direction {
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Warp => "warp",
+            Self::Weft => "weft",
+            Self::Shear => "bias",
+        }
+    }
+}
+
+/// How a12 is set: strips alone do not determine it (see the crate's identifiability notes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum A12Rule {
+    /// a12 = ½ min(a11, a22) (the paper's §3 default)
+    HalfMin,
+    /// a12 = ν12 a22, from a measured Poisson ratio
+    Poisson(f64),
+    /// a known value
+    Fixed(f64),
+}
+
+impl A12Rule {
+    pub fn apply(self, law: &mut Orthotropic) {
+        law.a12 = match self {
+            Self::HalfMin => 0.5 * law.a11.min(law.a22),
+            Self::Poisson(nu) => nu * law.a22,
+            Self::Fixed(v) => v,
+        };
+    }
+
+    /// ∂a12/∂c of a stage's stiffness c.
+    fn derivative(self, dir: Direction, law: &Orthotropic) -> f64 {
+        match (self, dir) {
+            (Self::HalfMin, Direction::Warp) if law.a11 <= law.a22 => 0.5,
+            (Self::HalfMin, Direction::Weft) if law.a22 < law.a11 => 0.5,
+            (Self::Poisson(nu), Direction::Weft) => nu,
+            _ => 0.0,
+        }
+    }
+}
+
+/// The map between a stage's variables p and the law.
+#[derive(Clone, Copy, Debug)]
+pub struct StageMap {
+    pub dir: Direction,
+    /// x̂: the largest tested value of η's argument
+    pub xhat: f64,
+    /// the stiffness is known (`[known]`): p holds only η's variables
+    pub c_known: bool,
+    pub a12: A12Rule,
+}
+
+impl StageMap {
+    fn offset(&self) -> usize {
+        usize::from(!self.c_known)
+    }
+
+    pub fn eta<'a>(&self, law: &'a Orthotropic) -> &'a Eta {
+        match self.dir {
+            Direction::Warp => &law.warp,
+            Direction::Weft => &law.weft,
+            Direction::Shear => &law.shear,
+        }
+    }
+
+    pub fn stiffness(&self, law: &Orthotropic) -> f64 {
+        match self.dir {
+            Direction::Warp => law.a11,
+            Direction::Weft => law.a22,
+            Direction::Shear => law.g12,
+        }
+    }
+
+    pub fn encode(&self, law: &Orthotropic) -> Vec<f64> {
+        let eta = self.eta(law);
+        let mut p = Vec::new();
+        if !self.c_known {
+            p.push(self.stiffness(law).ln());
+        }
+        p.extend(&eta.mu[1..]);
+        p.extend(eta.alpha.iter().map(|a| a * self.xhat));
+        p
+    }
+
+    pub fn degree(&self, p: &[f64]) -> usize {
+        (p.len() - self.offset()).div_ceil(2)
+    }
+
+    /// The variables of degree d + 1 that start exactly at degree d's law `p`: a new term
+    /// with μ = 0 bending at `beta`.
+    pub fn raise(&self, p: &[f64], beta: f64) -> Vec<f64> {
+        let o = self.offset();
+        let d = self.degree(p);
+        let mut q = p[..o + d - 1].to_vec();
+        q.push(0.0);
+        q.extend(&p[o + d - 1..]);
+        q.push(beta);
+        q
+    }
+
+    pub fn decode(&self, p: &[f64], law: &mut Orthotropic) {
+        let o = self.offset();
+        let d = self.degree(p);
+        let mus = &p[o..o + d - 1];
+        let mut mu = vec![1.0 - mus.iter().sum::<f64>()];
+        mu.extend(mus);
+        let alpha: Vec<f64> = p[o + d - 1..].iter().map(|b| b / self.xhat).collect();
+        let eta = Eta { mu, alpha };
+        let c = if self.c_known {
+            self.stiffness(law)
+        } else {
+            p[0].exp()
+        };
+        match self.dir {
+            Direction::Warp => {
+                law.a11 = c;
+                law.warp = eta;
+            }
+            Direction::Weft => {
+                law.a22 = c;
+                law.weft = eta;
+            }
+            Direction::Shear => {
+                law.g12 = c;
+                law.shear = eta;
+            }
+        }
+        self.a12.apply(law);
+    }
+
+    /// Index of the stage's stiffness and of its η's first parameter in the law's
+    /// parameters ([`Orthotropic::names`] order).
+    fn indices(&self, law: &Orthotropic) -> (usize, usize) {
+        let (d1, d3) = (law.warp.degree(), law.weft.degree());
+        match self.dir {
+            Direction::Warp => (0, 4),
+            Direction::Weft => (1, 4 + 2 * d1),
+            Direction::Shear => (3, 4 + 2 * d1 + 2 * d3),
+        }
+    }
+
+    /// The law parameters (then thickness) a stage's forces depend on through p.
+    pub fn wanted(&self, law: &Orthotropic) -> Vec<bool> {
+        let (d1, d3, d4) = (law.warp.degree(), law.weft.degree(), law.shear.degree());
+        let mut w = vec![false; 4 + 2 * (d1 + d3 + d4) + 1];
+        let (ci, offset) = self.indices(law);
+        let d = self.eta(law).degree();
+        w[ci] = true;
+        w[2] = true;
+        w[offset..offset + 2 * d].iter_mut().for_each(|v| *v = true);
+        w
+    }
+
+    /// dF/dp from dF/dk (the law's parameters in [`Orthotropic::names`] order).
+    pub fn chain(&self, p: &[f64], law: &Orthotropic, dk: &[f64]) -> Vec<f64> {
+        let o = self.offset();
+        let d = self.degree(p);
+        let (ci, offset) = self.indices(law);
+        let mut out = vec![0.0; p.len()];
+        if !self.c_known {
+            let c = p[0].exp();
+            out[0] = c * (dk[ci] + self.a12.derivative(self.dir, law) * dk[2]);
+        }
+        for i in 1..d {
+            out[o + i - 1] = dk[offset + i] - dk[offset];
+        }
+        for i in 0..d {
+            out[o + d - 1 + i] = dk[offset + d + i] / self.xhat;
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Cutoffs;
+
+    fn law() -> Orthotropic {
+        Orthotropic {
+            a11: 2e8,
+            a22: 1e8,
+            a12: 5e7,
+            g12: 3e6,
+            warp: Eta {
+                mu: vec![0.6, 0.4],
+                alpha: vec![1.0, 40.0],
+            },
+            weft: Eta::linear(),
+            shear: Eta {
+                mu: vec![0.7, 0.3],
+                alpha: vec![2.0, 90.0],
+            },
+            cutoffs: Cutoffs::none(),
+        }
+    }
+
+    #[test]
+    fn encode_decode_and_raise_round_trip() {
+        for c_known in [false, true] {
+            for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
+                let map = StageMap {
+                    dir,
+                    xhat: 2e-3,
+                    c_known,
+                    a12: A12Rule::Poisson(0.1),
+                };
+                let l = law();
+                let p = map.encode(&l);
+                let mut back = l.clone();
+                map.decode(&p, &mut back);
+                assert_eq!(map.eta(&back).mu.len(), map.eta(&l).mu.len());
+                assert!((map.stiffness(&back) - map.stiffness(&l)).abs() < 1e-6);
+                assert!((back.a12 - 0.1 * back.a22).abs() < 1e-6);
+                // the raised law is the same law: a new term with μ = 0
+                let q = map.raise(&p, 7.0);
+                assert_eq!(map.degree(&q), map.degree(&p) + 1);
+                let mut raised = l.clone();
+                map.decode(&q, &mut raised);
+                let (a, b) = (map.eta(&back), map.eta(&raised));
+                for x in [1e-4, 1e-3, 4e-3] {
+                    let (va, vb) = (a.eval(x).unwrap()[0], b.eval(x).unwrap()[0]);
+                    assert!((va - vb).abs() < 1e-12 * va.abs());
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,418 @@
+//! From lab curves to what the fit compares: toe compensation, the curves' roles and repeats,
+//! and the strips the model solves (one per angle and geometry, shared by its repeats, solved
+//! at a few elongation nodes and interpolated to every measured point).
+//!
+//! **Toe compensation.** A hand-mounted strip starts slack (the force rises slowly before the
+//! strip is taut) or preloaded (a force at zero elongation). Both shift the elongation axis.
+//! The start of the curve (the points up to 40 % of the largest force) is fitted twice by least
+//! squares: by a cubic through the origin, and by a hinge, zero up to an elongation s and a
+//! cubic in (e − s) after it, s found by a search. When the hinge fits at least four times
+//! better (residual sum of squares) the curve has a toe: its zero moves to s (the tangent of
+//! the steep region extended to zero force, in the limit of a sharp knee), points before it are
+//! dropped, the rest shifted, and the strip's rest length taken as gauge + s (a slack strip is
+//! that much longer, a preloaded one that much shorter). A smooth curve through the origin,
+//! stiffening or not, is fitted by the cubic already and keeps its zero. s < 0 is a preload.
+
+use super::FitError;
+use crate::dataset::{FabricDataset, Role, TensileTest};
+
+/// How the toe of every curve is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ToeMode {
+    /// Detect slack and preload and remove them (see the module doc).
+    Auto,
+    /// Keep every curve's zero as measured (a per-test `toe_mm` still applies).
+    None,
+}
+
+/// Which repeats the fit uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum RepeatMode {
+    /// Every repeat, each curve weighted equally.
+    All,
+    /// The paper's choice: the repeat with the largest forces (warp, weft), the median one
+    /// (other fitted angles).
+    Largest,
+}
+
+/// A measured curve ready for the fit.
+#[derive(Clone, Debug)]
+pub struct Curve {
+    /// index of the test in the dataset
+    pub test: usize,
+    pub angle_deg: f64,
+    pub role: Role,
+    /// 1-based among the tests at the same angle
+    pub repeat: usize,
+    pub used_in_fit: bool,
+    /// elongation removed at the start, m (negative: a preload); `auto` when detected
+    pub toe: f64,
+    pub toe_auto: bool,
+    /// (elongation after the toe, force) of every point the objective uses, m and N
+    pub points: Vec<(f64, f64)>,
+    /// points left out (before the toe, or with forces under 1e-3 of the largest)
+    pub dropped: usize,
+    /// index of its strip in [`Prepared::strips`]
+    pub strip: usize,
+}
+
+/// A strip the model solves: one angle and geometry, shared by the curves measured on it.
+#[derive(Clone, Debug)]
+pub struct Strip {
+    pub angle_deg: f64,
+    pub width: f64,
+    /// rest length: gauge length + toe
+    pub length: f64,
+    pub curves: Vec<usize>,
+    /// elongations the model is solved at (increasing, the last the largest measured)
+    pub nodes: Vec<f64>,
+}
+
+/// The dataset's curves and strips.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    pub curves: Vec<Curve>,
+    pub strips: Vec<Strip>,
+    pub notes: Vec<String>,
+}
+
+/// Least-squares residual of a cubic in (e − s)₊ without a constant (points with e ≤ s
+/// predicted as 0).
+fn cubic_rss(pts: &[(f64, f64)], s: f64) -> f64 {
+    let scale = pts.last().map_or(1.0, |p| p.0.abs().max(1e-12));
+    let mut ata = nalgebra::Matrix3::<f64>::zeros();
+    let mut atb = nalgebra::Vector3::<f64>::zeros();
+    for &(e, f) in pts {
+        let x = ((e - s) / scale).max(0.0);
+        let row = nalgebra::Vector3::new(x, x * x, x * x * x);
+        ata += row * row.transpose();
+        atb += row * f;
+    }
+    let Some(c) = ata.try_inverse().map(|inv| inv * atb) else {
+        return f64::INFINITY;
+    };
+    pts.iter()
+        .map(|&(e, f)| {
+            let x = ((e - s) / scale).max(0.0);
+            let r = c[0] * x + c[1] * x * x + c[2] * x * x * x - f;
+            r * r
+        })
+        .sum()
+}
+
+/// The toe of a curve (m; negative: a preload), or 0 when it has none (module doc).
+pub fn detect_toe(elongation: &[f64], force: &[f64]) -> f64 {
+    let fmax = force.iter().copied().fold(0.0, f64::max);
+    if fmax <= 0.0 {
+        return 0.0;
+    }
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for frac in [0.4, 0.6, 0.8, 1.0] {
+        pts = elongation
+            .iter()
+            .zip(force)
+            .take_while(|(_, &f)| f <= frac * fmax)
+            .map(|(&e, &f)| (e, f))
+            .collect();
+        if pts.len() >= 8 {
+            break;
+        }
+    }
+    if pts.len() < 6 {
+        return 0.0;
+    }
+    let e_end = pts.last().map_or(0.0, |p| p.0);
+    let rss0 = cubic_rss(&pts, 0.0);
+    // s from a preload of a quarter of the region to three quarters of it: a grid, then
+    // golden-section refinement around the best grid point
+    let (lo, hi) = (-0.25 * e_end, 0.75 * e_end);
+    let n = 60;
+    let grid: Vec<f64> = (0..=n)
+        .map(|k| lo + (hi - lo) * k as f64 / n as f64)
+        .collect();
+    let k = (0..grid.len())
+        .min_by(|&i, &j| cubic_rss(&pts, grid[i]).total_cmp(&cubic_rss(&pts, grid[j])))
+        .unwrap_or(0);
+    let h = (hi - lo) / n as f64;
+    let (mut a, mut b) = (grid[k] - h, grid[k] + h);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..40 {
+        let (c, d) = (b - g * (b - a), a + g * (b - a));
+        if cubic_rss(&pts, c) < cubic_rss(&pts, d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let s = 0.5 * (a + b);
+    let rss = cubic_rss(&pts, s);
+    let total: f64 = pts.iter().map(|p| p.1 * p.1).sum();
+    if rss * 4.0 < rss0 && rss0 > 1e-5 * total {
+        s
+    } else {
+        0.0
+    }
+}
+
+/// Local cubic (Lagrange) interpolation weights of `x` over the nodes `0 ∪ nodes`: the model
+/// force at x is Σ w_k F_k with F_0 = 0 at the origin. Returns (node index into `nodes`,
+/// weight) pairs; the origin's weight is dropped (its force is zero).
+pub fn interpolation_weights(nodes: &[f64], x: f64) -> Vec<(usize, f64)> {
+    let mut all = vec![0.0];
+    all.extend_from_slice(nodes);
+    let n = all.len();
+    if n == 1 {
+        return Vec::new();
+    }
+    // the interval holding x, and four points around it
+    let i = all.partition_point(|&v| v <= x).clamp(1, n - 1);
+    let m = 4.min(n);
+    let start = (i as isize - 2).clamp(0, (n - m) as isize) as usize;
+    let idx: Vec<usize> = (start..start + m).collect();
+    let mut out = Vec::new();
+    for &a in &idx {
+        let mut w = 1.0;
+        for &b in &idx {
+            if a != b {
+                w *= (x - all[b]) / (all[a] - all[b]);
+            }
+        }
+        if a > 0 {
+            out.push((a - 1, w));
+        }
+    }
+    out
+}
+
+/// Node elongations for a strip whose largest measured elongation is `emax`: denser at small
+/// strains (where drape lives), `(k/n)^1.5`.
+pub fn nodes_for(emax: f64, n: usize) -> Vec<f64> {
+    (1..=n)
+        .map(|k| emax * (k as f64 / n as f64).powf(1.5))
+        .collect()
+}
+
+fn max_force(t: &TensileTest) -> f64 {
+    t.force.iter().cloned().fold(f64::MIN, f64::max)
+}
+
+/// Prepares every tensile curve: roles (`paper`: the paper's 0/45/90 split), repeats used,
+/// toes, points, and the strips with `n_nodes` nodes each.
+pub fn prepare(
+    data: &FabricDataset,
+    paper: bool,
+    repeats: RepeatMode,
+    toe: ToeMode,
+    n_nodes: usize,
+) -> Result<Prepared, FitError> {
+    let mut notes = Vec::new();
+    let mut curves = Vec::new();
+    for (i, t) in data.tensile.iter().enumerate() {
+        let name = t.curve.display();
+        if t.suspect_kn {
+            return Err(FitError::Data(format!(
+                "{name}: the forces look like kN (see the warning above); if they are, give `force_scale = 1000` for this test in the dataset (or another factor: 1/n for n strips pulled together); if they are right, `force_scale = 1` says so"
+            )));
+        }
+        let fmax = max_force(t);
+        if fmax.is_nan() || fmax <= 0.0 {
+            return Err(FitError::Data(format!(
+                "{name}: every force is zero or below: nothing to fit (is the force column right?)"
+            )));
+        }
+        let (shift, auto) = match (t.toe, toe) {
+            (Some(s), _) => (s, false),
+            (None, ToeMode::Auto) => (detect_toe(&t.elongation, &t.force), true),
+            (None, ToeMode::None) => (0.0, false),
+        };
+        let mut points = Vec::new();
+        let mut dropped = 0;
+        for (&e, &f) in t.elongation.iter().zip(&t.force) {
+            let x = e - shift;
+            if x > 0.0 && f > 1e-3 * fmax {
+                points.push((x, f));
+            } else {
+                dropped += 1;
+            }
+        }
+        if points.len() < 2 {
+            return Err(FitError::Data(format!(
+                "{name}: fewer than two points with force after the toe ({:.3} mm removed): nothing to fit",
+                shift * 1e3
+            )));
+        }
+        if shift != 0.0 {
+            let what = if shift > 0.0 { "slack" } else { "preload" };
+            notes.push(format!(
+                "{name}: toe {:.3} mm removed ({what}, {}){}",
+                shift * 1e3,
+                if auto { "detected" } else { "toe_mm" },
+                if shift.abs() > 0.01 * t.gauge_length {
+                    format!(
+                        "; warning: above 1 % of the {:.0} mm gauge length",
+                        t.gauge_length * 1e3
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        let repeat = 1 + data.tensile[..i]
+            .iter()
+            .filter(|u| (u.angle_deg - t.angle_deg).abs() < 1e-9)
+            .count();
+        curves.push(Curve {
+            test: i,
+            angle_deg: t.angle_deg,
+            role: t.role(paper),
+            repeat,
+            used_in_fit: false,
+            toe: shift,
+            toe_auto: auto,
+            points,
+            dropped,
+            strip: 0,
+        });
+    }
+    choose_repeats(data, &mut curves, repeats, &mut notes);
+    let strips = group_strips(data, &mut curves, n_nodes);
+    Ok(Prepared {
+        curves,
+        strips,
+        notes,
+    })
+}
+
+/// Marks the curves the fit uses.
+fn choose_repeats(
+    data: &FabricDataset,
+    curves: &mut [Curve],
+    mode: RepeatMode,
+    notes: &mut Vec<String>,
+) {
+    let mut angles: Vec<f64> = curves.iter().map(|c| c.angle_deg).collect();
+    angles.sort_by(f64::total_cmp);
+    angles.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    for angle in angles {
+        let mut at: Vec<usize> = (0..curves.len())
+            .filter(|&k| (curves[k].angle_deg - angle).abs() < 1e-9 && curves[k].role == Role::Fit)
+            .collect();
+        if at.is_empty() {
+            continue;
+        }
+        if mode == RepeatMode::All || at.len() == 1 {
+            at.iter().for_each(|&k| curves[k].used_in_fit = true);
+            continue;
+        }
+        at.sort_by(|&a, &b| {
+            max_force(&data.tensile[curves[a].test])
+                .total_cmp(&max_force(&data.tensile[curves[b].test]))
+        });
+        let axis = (angle - 90.0).abs() < 1e-9 || angle.abs() < 1e-9;
+        let k = if axis {
+            at[at.len() - 1]
+        } else {
+            at[at.len() / 2]
+        };
+        curves[k].used_in_fit = true;
+        notes.push(format!(
+            "{angle}°: fitted repeat {} of {} ({}; --repeat largest)",
+            data.tensile[curves[k].test].curve.display(),
+            at.len(),
+            if axis {
+                "the largest forces"
+            } else {
+                "the median largest force"
+            }
+        ));
+    }
+}
+
+/// Groups curves measured on the same strip (angle, width, rest length) and gives each
+/// strip its nodes.
+fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> Vec<Strip> {
+    let mut strips: Vec<Strip> = Vec::new();
+    for (k, c) in curves.iter_mut().enumerate() {
+        let t = &data.tensile[c.test];
+        let length = t.gauge_length + c.toe;
+        let same = |s: &Strip| {
+            (s.angle_deg - c.angle_deg).abs() < 1e-9
+                && (s.width - t.width).abs() <= 1e-12 * t.width
+                && (s.length - length).abs() <= 1e-12 * length
+        };
+        let i = match strips.iter().position(same) {
+            Some(i) => i,
+            None => {
+                strips.push(Strip {
+                    angle_deg: c.angle_deg,
+                    width: t.width,
+                    length,
+                    curves: Vec::new(),
+                    nodes: Vec::new(),
+                });
+                strips.len() - 1
+            }
+        };
+        strips[i].curves.push(k);
+        c.strip = i;
+    }
+    for s in &mut strips {
+        let emax = s
+            .curves
+            .iter()
+            .flat_map(|&k| curves[k].points.last().map(|p| p.0))
+            .fold(0.0, f64::max);
+        s.nodes = nodes_for(emax, n_nodes);
+    }
+    strips
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(f: impl Fn(f64) -> f64, emax: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
+        let e: Vec<f64> = (0..=n).map(|k| emax * k as f64 / n as f64).collect();
+        let force = e.iter().map(|&x| f(x)).collect();
+        (e, force)
+    }
+
+    #[test]
+    fn smooth_curves_through_the_origin_keep_their_zero() {
+        // linear, stiffening (J-shaped, as crimp gives), and a law that softens
+        for f in [
+            &(|x: f64| 4000.0 * x) as &dyn Fn(f64) -> f64,
+            &|x: f64| 2e3 * x + 4e6 * x * x + 3e9 * x * x * x,
+            &|x: f64| 1e4 * x - 2e6 * x * x,
+        ] {
+            let (e, force) = curve(f, 3e-3, 40);
+            assert_eq!(detect_toe(&e, &force), 0.0);
+        }
+    }
+
+    #[test]
+    fn slack_and_preload_are_found() {
+        // 1 mm of slack before a stiffening curve; a preload of 0.3 mm equivalent
+        let slack = 1e-3;
+        let law = |x: f64| 8e3 * x + 2e6 * x * x;
+        let (e, force) = curve(|x| if x > slack { law(x - slack) } else { 0.0 }, 6e-3, 60);
+        let s = detect_toe(&e, &force);
+        assert!((s - slack).abs() < 0.03e-3, "{s}");
+        let (e, force) = curve(|x| law(x + 0.3e-3), 5e-3, 50);
+        let s = detect_toe(&e, &force);
+        assert!((s + 0.3e-3).abs() < 0.03e-3, "{s}");
+    }
+
+    #[test]
+    fn interpolation_is_exact_for_cubics_and_uses_the_origin() {
+        let nodes = nodes_for(2.0, 7);
+        let f = |x: f64| 3.0 * x + 0.5 * x * x - 0.25 * x * x * x;
+        for x in [0.01, 0.3, 0.77, 1.4, 2.0] {
+            let v: f64 = interpolation_weights(&nodes, x)
+                .iter()
+                .map(|&(k, w)| w * f(nodes[k]))
+                .sum();
+            assert!((v - f(x)).abs() < 1e-12, "{x}: {v} vs {}", f(x));
+        }
+    }
+}

@@ -1,0 +1,174 @@
+//! The strips the fitter solves: set up once per strip and mesh level, kept warm between
+//! evaluations, and their node forces interpolated to every measured point of the curves
+//! measured on them.
+
+use super::preprocess::interpolation_weights;
+use super::{FitError, Fitter, RigKey, FIT_RTOL, NEAR_ANGLE_DEG};
+use crate::material::Orthotropic;
+use crate::scene::{SceneError, StripRig, TensileStrip};
+
+/// A strip mesh at a ladder level: the level's 50 × 75 mm mesh scaled to the strip.
+pub(super) fn strip_mesh(level: (usize, usize), width: f64, length: f64) -> (usize, usize) {
+    let h = 0.05 / level.0 as f64;
+    (
+        ((width / h).round() as usize).max(2),
+        ((length / h).round() as usize).max(2),
+    )
+}
+
+/// Forces of a strip at its nodes and ∂F/∂k (law parameters, then thickness) when asked.
+pub(super) type NodeForces = (Vec<f64>, Vec<Vec<f64>>);
+
+impl Fitter<'_> {
+    /// The rig of strip `s` cut at `angle` on a mesh level: from the cache (warm) or set up;
+    /// hand it back with [`Fitter::keep_rig`].
+    pub(super) fn strip_rig(
+        &mut self,
+        s: usize,
+        angle: f64,
+        level: (usize, usize),
+    ) -> Result<(RigKey, StripRig), FitError> {
+        let strip = &self.prep.strips[s];
+        let key = (
+            [
+                strip.width.to_bits(),
+                strip.length.to_bits(),
+                angle.to_bits(),
+            ],
+            level,
+            strip
+                .nodes
+                .iter()
+                .map(|e| e.to_bits())
+                .collect::<Vec<u64>>(),
+        );
+        if let Some(rig) = self.rigs.remove(&key) {
+            return Ok((key, rig));
+        }
+        let mut t = TensileStrip::new(strip.width, strip.length, angle);
+        t.mesh = strip_mesh(level, strip.width, strip.length);
+        // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
+        t.solver.max_iterations = 500;
+        // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
+        t.solver.rtol = FIT_RTOL;
+        let mut rig = t
+            .rig(&self.material(), &strip.nodes)
+            .map_err(|source| FitError::Scene {
+                stage: format!("setting up the {angle}° strip"),
+                source,
+            })?;
+        // a strip cut at a nearby angle (the misalignment grid) starts from the nearest such
+        // strip's equilibria rather than from rest
+        let nearest = self
+            .rigs
+            .iter()
+            .filter(|(k, _)| k.0[..2] == key.0[..2] && k.1 == key.1 && k.2 == key.2)
+            .map(|(k, r)| ((f64::from_bits(k.0[2]) - angle).abs(), r))
+            .filter(|(d, _)| *d <= NEAR_ANGLE_DEG)
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, other)) = nearest {
+            rig.warm_from(other);
+        }
+        Ok((key, rig))
+    }
+
+    pub(super) fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {
+        rig.set_wanted(None);
+        self.rigs.insert(key, rig);
+    }
+
+    /// Runs a rig with `law` and the current thickness (forces, and ∂F/∂k when asked).
+    pub(super) fn run_rig(
+        &mut self,
+        rig: &mut StripRig,
+        law: &Orthotropic,
+        sens: bool,
+    ) -> Result<NodeForces, SceneError> {
+        rig.set_material(law, self.thickness)?;
+        let pts = rig.run(sens)?;
+        self.stats.evaluations += 1;
+        self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+        Ok((
+            pts.iter().map(|p| p.force).collect(),
+            pts.into_iter().map(|p| p.dforce).collect(),
+        ))
+    }
+
+    /// Node forces of strip `s` cut at `angle` on a mesh level with the current material (no
+    /// sensitivities), memoised by parameters.
+    pub(super) fn predict(
+        &mut self,
+        s: usize,
+        angle: f64,
+        level: (usize, usize),
+    ) -> Result<Vec<f64>, FitError> {
+        let (key, mut rig) = self.strip_rig(s, angle, level)?;
+        let law = self.law.clone();
+        let mut params = law.params();
+        params.push(self.thickness);
+        let memo_key = (
+            key.clone(),
+            params.iter().map(|v| v.to_bits()).collect::<Vec<u64>>(),
+        );
+        if let Some(f) = self.predictions.get(&memo_key) {
+            let f = f.clone();
+            self.keep_rig(key, rig);
+            return Ok(f);
+        }
+        let out = self
+            .run_rig(&mut rig, &law, false)
+            .map(|r| r.0)
+            .map_err(|source| FitError::Scene {
+                stage: format!("predicting the {angle}° strip"),
+                source,
+            });
+        self.keep_rig(key, rig);
+        if let Ok(f) = &out {
+            self.predictions.insert(memo_key, f.clone());
+        }
+        out
+    }
+
+    /// A curve's model forces at its points, interpolated from its strip's node forces.
+    pub(super) fn curve_forces(&self, c: usize, node_forces: &[f64]) -> Vec<f64> {
+        let curve = &self.prep.curves[c];
+        let nodes = &self.prep.strips[curve.strip].nodes;
+        curve
+            .points
+            .iter()
+            .map(|&(e, _)| {
+                interpolation_weights(nodes, e)
+                    .iter()
+                    .map(|&(k, w)| w * node_forces[k])
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// Residuals r = w (F̂ − F)/F of a curve, w = 1/√n so that every curve counts alike, and their
+/// rows of ∂r/∂p from the nodes' ∂F/∂p.
+pub(super) fn curve_residuals(
+    points: &[(f64, f64)],
+    nodes: &[f64],
+    node_forces: &[f64],
+    node_dp: Option<&[Vec<f64>]>,
+    out_r: &mut Vec<f64>,
+    out_j: &mut Vec<Vec<f64>>,
+) {
+    let w = 1.0 / (points.len() as f64).sqrt();
+    for &(e, f) in points {
+        let weights = interpolation_weights(nodes, e);
+        let model: f64 = weights.iter().map(|&(k, a)| a * node_forces[k]).sum();
+        out_r.push(w * (model - f) / f);
+        if let Some(d) = node_dp {
+            let mut row = vec![0.0; d.first().map_or(0, |r| r.len())];
+            for &(k, a) in &weights {
+                for (r, v) in row.iter_mut().zip(&d[k]) {
+                    *r += w * a * v / f;
+                }
+            }
+            out_j.push(row);
+        }
+    }
+}

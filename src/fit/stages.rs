@@ -1,0 +1,700 @@
+//! The stages of the fit (paper §5): the homogeneous bootstrap with the degree choice, the
+//! tensile stages on the shell model, the thickness from the bends, and the ladder of meshes.
+
+use super::bootstrap::homogeneous_curve;
+use super::map::{Direction, StageMap};
+use super::optim::{minimize, Evaluation, Method, OptimOptions};
+use super::rigs::curve_residuals;
+use super::{to_evaluation, FitError, Fitter, StrainRange, TRIAL_RETRY_ITERATIONS};
+use crate::dataset::BendTest;
+use crate::material::Orthotropic;
+use crate::scene::{BendRig, CantileverBend, SceneError};
+use std::time::Instant;
+
+/// A cantilever mesh at a ladder level (4 × (overhang / 6.25 mm) at 8 × 12, doubled per level).
+pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize) {
+    let f = level.0 as f64 / 8.0;
+    let nx = ((4.0 * f).round() as usize).max(2);
+    let ny = ((bend.overhang / (bend.width / 4.0) * f).round() as usize).max(4);
+    (nx, ny)
+}
+
+impl Fitter<'_> {
+    /// Bootstrap fit of one direction from a start p on the homogeneous strip over the
+    /// stage's curves; returns (p, mean relative error, shape error).
+    fn bootstrap_fit(
+        &mut self,
+        map: StageMap,
+        curves: &[usize],
+        p0: Vec<f64>,
+    ) -> Option<(Vec<f64>, f64, f64)> {
+        let mut p = p0;
+        let base = self.law.clone();
+        let tau = self.thickness;
+        let prep = &self.prep;
+        let opts = OptimOptions {
+            method: Method::GaussNewton,
+            max_iterations: 100,
+            rel_decrease: 1e-10,
+            gtol: 0.0,
+            target: 0.0,
+            max_step: 2.0,
+        };
+        let residuals = |q: &[f64], jac: bool| -> Result<(Vec<f64>, Vec<Vec<f64>>), ()> {
+            let mut law = base.clone();
+            map.decode(q, &mut law);
+            let (mut r, mut j) = (Vec::new(), Vec::new());
+            for &c in curves {
+                let curve = &prep.curves[c];
+                let s = &prep.strips[curve.strip];
+                let elong: Vec<f64> = curve.points.iter().map(|p| p.0).collect();
+                let pts = homogeneous_curve(&law, s.angle_deg, s.width, s.length, tau, &elong, jac)
+                    .map_err(|_| ())?;
+                let w = 1.0 / (elong.len() as f64).sqrt();
+                for (m, h) in curve.points.iter().zip(&pts) {
+                    r.push(w * (h.force - m.1) / m.1);
+                    if jac {
+                        let d = map.chain(q, &law, &h.dforce);
+                        j.push(d.iter().map(|v| w * v / m.1).collect());
+                    }
+                }
+            }
+            Ok((r, j))
+        };
+        let rep = minimize(&mut p, &opts, |q: &[f64], jac: bool| {
+            let (r, j) = residuals(q, jac)?;
+            Ok::<_, ()>(to_evaluation(r, j, q.len(), jac))
+        })
+        .ok()?;
+        self.stats.bootstrap_evaluations += rep.evaluations;
+        let (r, _) = residuals(&p, false).ok()?;
+        // unweighted relative errors, curve by curve
+        let lens: Vec<usize> = curves
+            .iter()
+            .map(|&c| prep.curves[c].points.len())
+            .collect();
+        let mut rel = Vec::with_capacity(r.len());
+        let mut k = 0;
+        for &n in &lens {
+            let w = 1.0 / (n as f64).sqrt();
+            rel.extend(r[k..k + n].iter().map(|v| v / w));
+            k += n;
+        }
+        let err = super::mean_abs(&rel);
+        let shape = super::shape_error(&lens, &rel);
+        (err.is_finite() && shape.is_finite()).then_some((p, err, shape))
+    }
+
+    /// Degree choice and initial guess of one direction on the homogeneous strip. Degree
+    /// d + 1 starts from degree d's optimum (among other starts), so it never ends worse.
+    /// Returns the chosen degree's variables and every degree's fit (index d − 1).
+    fn bootstrap(&mut self, map: StageMap, curves: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
+        // secant stiffness of the first curve as the start of degree 1
+        let c0 = {
+            let curve = &self.prep.curves[curves[0]];
+            let s = &self.prep.strips[curve.strip];
+            let (dl, f) = *curve.points.last().expect("a curve with points");
+            let lambda = 1.0 + dl / s.length;
+            let secant = f / (s.width * self.thickness * lambda * super::green(dl, s.length));
+            match map.dir {
+                Direction::Shear => 0.25 * secant,
+                _ => secant,
+            }
+        };
+        let mut best: Option<(Vec<f64>, f64, f64)> = None;
+        for beta in [1e-3, 1.0, 5.0] {
+            let p = if map.c_known {
+                vec![beta]
+            } else {
+                vec![c0.ln(), beta]
+            };
+            if let Some(r) = self.bootstrap_fit(map, curves, p) {
+                if best.as_ref().is_none_or(|b| r.1 < b.1) {
+                    best = Some(r);
+                }
+            }
+        }
+        let Some(mut chosen) = best else {
+            return (map.encode(&self.law), Vec::new());
+        };
+        let mut all = vec![chosen.0.clone()];
+        self.log_degree(format!(
+            "{}: degree 1, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
+            map.dir.name(),
+            100.0 * chosen.1,
+            100.0 * chosen.2
+        ));
+        let fixed = self.opts.fixed_degree;
+        for degree in 2..=fixed.unwrap_or(self.opts.max_degree) {
+            if fixed.is_none() && chosen.2 <= self.opts.degree_good {
+                self.degree_log.push(format!(
+                    "{}: degree {} kept: error below {:.2} %",
+                    map.dir.name(),
+                    degree - 1,
+                    100.0 * self.opts.degree_good
+                ));
+                break;
+            }
+            let prev = all.last().expect("degree 1").clone();
+            let mut best: Option<(Vec<f64>, f64, f64)> = None;
+            for mu_new in [0.0, 0.3, -0.3, 0.7] {
+                for beta_new in [0.5, 3.0, 15.0, 60.0] {
+                    let mut p = map.raise(&prev, beta_new);
+                    let o = usize::from(!map.c_known);
+                    p[o + degree - 2] = mu_new;
+                    if let Some(r) = self.bootstrap_fit(map, curves, p) {
+                        if best.as_ref().is_none_or(|b| r.1 < b.1) {
+                            best = Some(r);
+                        }
+                    }
+                }
+            }
+            let Some(candidate) = best else { break };
+            self.log_degree(format!(
+                "{}: degree {degree}, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
+                map.dir.name(),
+                100.0 * candidate.1,
+                100.0 * candidate.2
+            ));
+            all.push(candidate.0.clone());
+            if fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2 {
+                chosen = candidate;
+            } else {
+                self.degree_log.push(format!(
+                    "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
+                    map.dir.name(),
+                    degree - 1,
+                    100.0 * (1.0 - self.opts.degree_gain)
+                ));
+                break;
+            }
+        }
+        (chosen.0, all)
+    }
+
+    fn log_degree(&mut self, line: String) {
+        self.say(&line);
+        self.degree_log.push(line);
+    }
+
+    /// One tensile stage on the shell model at one mesh level, over the stage's strips;
+    /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
+    /// strain range the strips exercise there.
+    fn shell_stage(
+        &mut self,
+        map: StageMap,
+        strips: &[usize],
+        level: (usize, usize),
+        strain_range: bool,
+    ) -> Result<(f64, Option<StrainRange>), FitError> {
+        let t0 = Instant::now();
+        let mut rigs = Vec::new();
+        for &s in strips {
+            let angle = self.prep.strips[s].angle_deg;
+            let (key, mut rig) = self.strip_rig(s, angle, level)?;
+            rig.set_wanted(Some(map.wanted(&self.law)));
+            rigs.push((key, rig));
+        }
+        let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
+        let ncurves: usize = curves.iter().map(Vec::len).sum();
+        let mut p = map.encode(&self.law);
+        let base = self.law.clone();
+        let first_level = level == self.opts.ladder[0];
+        // finer levels start from the last level's fit and only polish it
+        let (max_iterations, rel_decrease) = if first_level {
+            (self.opts.max_iterations, self.opts.rel_decrease)
+        } else {
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
+        };
+        let opts = OptimOptions {
+            method: self.opts.method,
+            max_iterations,
+            rel_decrease,
+            gtol: 1e-12,
+            target: ncurves as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
+        };
+        let (mut evals, mut newton) = (0, 0);
+        let tau = self.thickness;
+        let prep = &self.prep;
+        // every evaluation's variables and residuals, for the shape error at the optimum
+        let mut seen: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        let mut problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+            let mut law = base.clone();
+            map.decode(q, &mut law);
+            let (mut r, mut j) = (Vec::new(), Vec::new());
+            for (((_, rig), &s), cs) in rigs.iter_mut().zip(strips).zip(&curves) {
+                rig.set_material(&law, tau)?;
+                // the stage's first evaluation must succeed; later ones are trials
+                rig.retry_iterations = (evals > 0).then_some(TRIAL_RETRY_ITERATIONS);
+                let pts = rig.run(jac);
+                rig.retry_iterations = None;
+                let pts = pts?;
+                newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+                let forces: Vec<f64> = pts.iter().map(|p| p.force).collect();
+                let d: Vec<Vec<f64>> = pts.iter().map(|p| map.chain(q, &law, &p.dforce)).collect();
+                for &c in cs {
+                    let nodes = &prep.strips[s].nodes;
+                    let dp = jac.then_some(&d[..]);
+                    curve_residuals(&prep.curves[c].points, nodes, &forces, dp, &mut r, &mut j);
+                }
+            }
+            evals += 1;
+            seen.push((q.to_vec(), r.clone()));
+            Ok(to_evaluation(r, j, q.len(), jac))
+        };
+        let fail = |source| FitError::Scene {
+            stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
+            source,
+        };
+        if first_level && !map.c_known {
+            // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
+            // jaws stop the strip from shearing freely): first fit the stiffness c alone
+            let rest = p[1..].to_vec();
+            let mut scale = vec![p[0]];
+            let one = OptimOptions {
+                method: Method::GaussNewton,
+                max_iterations: 10,
+                rel_decrease: 1e-2,
+                ..opts
+            };
+            minimize(&mut scale, &one, |q: &[f64], jac: bool| {
+                let mut full = vec![q[0]];
+                full.extend(&rest);
+                let e = problem(&full, jac)?;
+                Ok(Evaluation {
+                    residuals: e.residuals,
+                    jacobian: e.jacobian.map(|j| j.columns(0, 1).into_owned()),
+                })
+            })
+            .map_err(fail)?;
+            p[0] = scale[0];
+        }
+        let rep = minimize(&mut p, &opts, &mut problem).map_err(fail)?;
+        self.stats.evaluations += evals;
+        self.stats.newton_iterations += newton;
+        map.decode(&p, &mut self.law);
+        let err = (rep.objective / ncurves.max(1) as f64).sqrt();
+        let lens: Vec<usize> = curves
+            .iter()
+            .flatten()
+            .map(|&c| self.prep.curves[c].points.len())
+            .collect();
+        let shape = seen
+            .iter()
+            .rev()
+            .find(|(q, _)| *q == p)
+            .map_or(err, |(_, r)| {
+                let mut rel = Vec::with_capacity(r.len());
+                let mut k = 0;
+                for &n in &lens {
+                    let w = 1.0 / (n as f64).sqrt();
+                    rel.extend(r[k..k + n].iter().map(|v| v / w));
+                    k += n;
+                }
+                super::shape_error(&lens, &rel)
+            });
+        let angles: Vec<String> = strips
+            .iter()
+            .map(|&s| format!("{}°", self.prep.strips[s].angle_deg))
+            .collect();
+        let msg = format!(
+            "{} stage ({}, {ncurves} curves), degree {}, mesh {}×{}: rms relative error {:.3} % (shape error {:.3} %) after {} iterations, {} evaluations, {} Newton iterations ({})",
+            map.dir.name(),
+            angles.join(" "),
+            map.degree(&p),
+            level.0,
+            level.1,
+            100.0 * err,
+            100.0 * shape,
+            rep.iterations,
+            rep.evaluations,
+            newton,
+            rep.stop
+        );
+        self.say(&msg);
+        let mut range: Option<StrainRange> = None;
+        if strain_range {
+            // the strains the tests exercised, at the fitted parameters
+            let law = self.law.clone();
+            for (_, rig) in &mut rigs {
+                self.run_rig(rig, &law, false)
+                    .map_err(|source| FitError::Scene {
+                        stage: format!("{} strips at the fit", map.dir.name()),
+                        source,
+                    })?;
+                if let Some((lo, hi)) = rig.strain_range() {
+                    let r = range.get_or_insert((lo, hi));
+                    for i in 0..3 {
+                        r.0[i] = r.0[i].min(lo[i]);
+                        r.1[i] = r.1[i].max(hi[i]);
+                    }
+                }
+            }
+        }
+        for (key, rig) in rigs {
+            self.keep_rig(key, rig);
+        }
+        self.time_stage(map.dir.name(), t0);
+        Ok((shape, range))
+    }
+
+    /// Degree choice on the shell model: degree 1 from the bootstrap, degree d + 1 from the
+    /// shell's degree-d fit with a new zero-weight term bending where the bootstrap put its
+    /// last term; kept only when it lowers the rms error by the degree gain.
+    fn shell_degree_ladder(
+        &mut self,
+        map: StageMap,
+        strips: &[usize],
+        level: (usize, usize),
+        candidates: &[Vec<f64>],
+    ) -> Result<(f64, Option<StrainRange>), FitError> {
+        let base = self.law.clone();
+        let mut best: Option<(f64, Orthotropic, Option<StrainRange>)> = None;
+        for (i, cand) in candidates.iter().enumerate() {
+            let degree = i + 1;
+            self.law = base.clone();
+            match &best {
+                Some((_, law, _)) => {
+                    let prev = map.encode(law);
+                    let beta = cand.last().copied().unwrap_or(1.0);
+                    self.law = law.clone();
+                    map.decode(&map.raise(&prev, beta), &mut self.law);
+                }
+                None => map.decode(cand, &mut self.law),
+            }
+            let (err, range) = match self.shell_stage(map, strips, level, true) {
+                Ok(r) => r,
+                Err(e) if best.is_some() => {
+                    self.log_degree(format!(
+                        "{}: degree {degree} failed on the shell ({e}); degree {} kept",
+                        map.dir.name(),
+                        degree - 1
+                    ));
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            self.degree_log.push(format!(
+                "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
+                map.dir.name(),
+                100.0 * err,
+                level.0,
+                level.1
+            ));
+            let better = match &best {
+                None => true,
+                Some(_) if self.opts.fixed_degree.is_some() => true,
+                Some(b) => err <= self.opts.degree_gain * b.0,
+            };
+            if !better {
+                self.log_degree(format!(
+                    "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
+                    map.dir.name(),
+                    degree - 1,
+                    100.0 * (1.0 - self.opts.degree_gain)
+                ));
+                break;
+            }
+            best = Some((err, self.law.clone(), range));
+            if self.opts.fixed_degree.is_none() && err <= self.opts.degree_good {
+                self.degree_log.push(format!(
+                    "{}: degree {degree} kept: error below {:.2} %",
+                    map.dir.name(),
+                    100.0 * self.opts.degree_good
+                ));
+                break;
+            }
+        }
+        let (err, law, range) = best.expect("one candidate at least");
+        self.law = law;
+        Ok((err, range))
+    }
+
+    /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
+    fn thickness_stage(
+        &mut self,
+        bends: &[BendTest],
+        level: (usize, usize),
+    ) -> Result<(), FitError> {
+        let t0 = Instant::now();
+        let mut rigs = Vec::new();
+        for b in bends {
+            let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+            bend.mesh = bend_mesh(level, b);
+            bend.solver.rtol = super::FIT_RTOL;
+            let rig = BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
+                stage: format!("setting up the {}° cantilever", b.angle_deg),
+                source,
+            })?;
+            rigs.push(rig);
+        }
+        let (law0, tau0) = (self.law.clone(), self.thickness);
+        let scaled = |q: &[f64]| {
+            let tau = tau0 * q[0].exp();
+            let s = tau0 / tau;
+            let mut law = law0.clone();
+            law.a11 *= s;
+            law.a22 *= s;
+            law.a12 *= s;
+            law.g12 *= s;
+            (law, tau)
+        };
+        let mut p = vec![0.0];
+        // as for the tensile stages, finer levels only polish the last level's thickness
+        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
+            (self.opts.max_iterations, self.opts.rel_decrease)
+        } else {
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
+        };
+        let opts = OptimOptions {
+            method: self.opts.method,
+            max_iterations,
+            rel_decrease,
+            gtol: 1e-14,
+            target: bends.len() as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
+        };
+        let (mut evals, mut newton) = (0, 0);
+        let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+            let (law, tau) = scaled(q);
+            let (mut r, mut j) = (Vec::new(), Vec::new());
+            for (rig, b) in rigs.iter_mut().zip(bends) {
+                rig.set_material(&law, tau)?;
+                let pt = rig.run(jac)?;
+                evals += 1;
+                newton += pt.report.iterations;
+                r.push((pt.drape_angle_deg - b.drape_angle_deg) / b.drape_angle_deg);
+                if jac {
+                    // d/d ln τ = τ ∂/∂τ − Σ a ∂/∂a over a11, a22, a12, g12
+                    let d = &pt.dangle;
+                    let dtau = tau * d[d.len() - 1]
+                        - law.a11 * d[0]
+                        - law.a22 * d[1]
+                        - law.a12 * d[2]
+                        - law.g12 * d[3];
+                    j.push(vec![dtau / b.drape_angle_deg]);
+                }
+            }
+            Ok(to_evaluation(r, j, 1, jac))
+        };
+        let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
+            stage: format!("thickness stage on {}×{}", level.0, level.1),
+            source,
+        })?;
+        self.stats.evaluations += evals;
+        self.stats.newton_iterations += newton;
+        let (law, tau) = scaled(&p);
+        // the drape angles at the accepted thickness (warm: a Newton step or two)
+        self.bend_angles.clear();
+        for rig in &mut rigs {
+            rig.set_material(&law, tau)
+                .and_then(|_| rig.run(false))
+                .map(|pt| self.bend_angles.push(pt.drape_angle_deg))
+                .map_err(|source| FitError::Scene {
+                    stage: "drape angles at the fitted thickness".into(),
+                    source,
+                })?;
+            self.stats.evaluations += 1;
+        }
+        self.law = law;
+        // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
+        if let super::map::A12Rule::Fixed(_) = self.a12 {
+            self.a12.apply(&mut self.law);
+        }
+        self.thickness = tau;
+        let msg = format!(
+            "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
+            level.0,
+            level.1,
+            tau * 1e3,
+            100.0 * (rep.objective / bends.len() as f64).sqrt(),
+            rep.evaluations,
+            rep.stop
+        );
+        self.say(&msg);
+        self.time_stage("thickness", t0);
+        Ok(())
+    }
+
+    /// Forces of every fitted curve on a mesh level at the current material (for the
+    /// ladder's change measure).
+    fn fitted_forces(
+        &mut self,
+        strips: &[usize],
+        level: (usize, usize),
+    ) -> Result<Vec<f64>, FitError> {
+        let mut out = Vec::new();
+        for &s in strips {
+            let node = self.predict(s, self.prep.strips[s].angle_deg, level)?;
+            for c in self.used_curves(&[s]) {
+                out.extend(self.curve_forces(c, &node));
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Bootstrap: degrees and initial guesses from the homogeneous strip, for every direction
+/// with fitted strips; defaults (with notes) for the others.
+pub(super) fn bootstrap_all(
+    f: &mut Fitter,
+    maps: &[StageMap],
+    strips: &[Vec<usize>],
+) -> Vec<Vec<f64>> {
+    let t0 = Instant::now();
+    f.say("bootstrap on the homogeneous-strain strip");
+    let mut shear_candidates = Vec::new();
+    for k in 0..2 {
+        let curves = f.used_curves(&strips[k]);
+        if !curves.is_empty() {
+            let (q, _) = f.bootstrap(maps[k], &curves);
+            let mut law = f.law.clone();
+            maps[k].decode(&q, &mut law);
+            f.law = law;
+        }
+    }
+    let known = &f.data.known;
+    match (strips[0].is_empty(), strips[1].is_empty()) {
+        (true, false) if known.a11.is_none() => {
+            f.law.a11 = f.law.a22;
+            f.law.warp = f.law.weft.clone();
+            f.notes
+                .push("warp not fitted (no 90° test): taken equal to the weft".into());
+        }
+        (false, true) if known.a22.is_none() => {
+            f.law.a22 = f.law.a11;
+            f.law.weft = f.law.warp.clone();
+            f.notes
+                .push("weft not fitted (no 0° test): taken equal to the warp".into());
+        }
+        (true, true) => f.notes.push(
+            "warp and weft not fitted (no 0° or 90° test): a11 and a22 as given in [known], linear"
+                .into(),
+        ),
+        _ => {}
+    }
+    f.a12.apply(&mut f.law);
+    let shear = f.used_curves(&strips[2]);
+    if !shear.is_empty() {
+        let (q, all) = f.bootstrap(maps[2], &shear);
+        let mut law = f.law.clone();
+        maps[2].decode(&q, &mut law);
+        f.law = law;
+        shear_candidates = all;
+    } else if f.data.known.g12.is_none() {
+        f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
+        let g12 = f.law.g12;
+        f.notes.push(format!(
+            "shear not fitted (no off-axis test): linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa"
+        ));
+    }
+    f.time_stage("bootstrap", t0);
+    shear_candidates
+}
+
+/// The shell model, coarse to fine; returns the meshes fitted on.
+pub(super) fn ladder(
+    f: &mut Fitter,
+    maps: &[StageMap],
+    strips: &[Vec<usize>],
+    shear_candidates: &[Vec<f64>],
+) -> Result<Vec<(usize, usize)>, FitError> {
+    let opts = f.opts;
+    let all: Vec<usize> = strips.iter().flatten().copied().collect();
+    let mut meshes = Vec::new();
+    let mut previous: Option<Vec<f64>> = None;
+    let mut last_change: Option<f64> = None;
+    for (li, &level) in opts.ladder.iter().enumerate() {
+        let from = meshes.last().copied().unwrap_or(level);
+        // is this level worth it? the change it would bring, from the last measured one at
+        // order 1.5 (the slowest order measured on strips: the 45° strip's clamped corners)
+        if let (Some(change), true) = (last_change, li >= 2) {
+            let estimate = change / 2f64.powf(1.5);
+            if estimate < opts.skip_tol {
+                let note = format!(
+                    "meshes from {}×{} on skipped: estimated to change the {}×{} fit's forces by {:.2} % (the last level changed them by {:.2} %; below {:.2} %)",
+                    level.0, level.1, from.0, from.1,
+                    100.0 * estimate, 100.0 * change, 100.0 * opts.skip_tol
+                );
+                f.say(&note);
+                f.notes.push(note);
+                break;
+            }
+        }
+        if let Some(prev) = &previous {
+            let now = f.fitted_forces(&all, level)?;
+            let change = prev
+                .iter()
+                .zip(&now)
+                .map(|(a, b)| ((b - a) / b).abs())
+                .sum::<f64>()
+                / now.len().max(1) as f64;
+            f.say(&format!(
+                "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
+                from.0,
+                from.1,
+                100.0 * change,
+                level.0,
+                level.1
+            ));
+            last_change = Some(change);
+            if change < opts.skip_tol {
+                let note = format!(
+                    "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
+                    level.0, level.1, from.0, from.1, 100.0 * change, 100.0 * opts.skip_tol
+                );
+                f.say(&note);
+                f.notes.push(note);
+                break;
+            }
+        }
+        meshes.push(level);
+        for k in 0..3 {
+            if strips[k].is_empty() {
+                continue;
+            }
+            let (_, range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+                // the homogeneous strip models a clamped bias strip poorly: choose the shear
+                // degree on the shell model itself
+                f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
+            } else {
+                f.shell_stage(maps[k], &strips[k], level, li == 0)?
+            };
+            // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
+            if let Some((lo, hi)) = range {
+                let law = &mut f.law;
+                let msg = match k {
+                    0 => {
+                        law.cutoffs.e11 = (0.0, 0.95 * hi[0]);
+                        format!("cut-off Ẽ11 ≤ {:.4}", law.cutoffs.e11.1)
+                    }
+                    1 => {
+                        law.cutoffs.e22 = (0.0, 0.95 * hi[1]);
+                        format!("cut-off Ẽ22 ≤ {:.4}", law.cutoffs.e22.1)
+                    }
+                    _ => {
+                        let e12 = 0.95 * hi[2].abs().max(lo[2].abs());
+                        law.cutoffs.e12 = (-e12, e12);
+                        format!("cut-off |Ẽ12| ≤ {e12:.4}")
+                    }
+                };
+                f.say(&msg);
+            }
+        }
+        let data = f.data;
+        if !data.bend.is_empty() && data.known.thickness.is_none() {
+            f.thickness_stage(&data.bend, level)?;
+        }
+        if li + 1 < opts.ladder.len() {
+            previous = Some(f.fitted_forces(&all, level)?);
+        }
+    }
+    Ok(meshes)
+}

@@ -1,0 +1,272 @@
+//! What the fit reports about itself: every curve predicted at its nominal cut angle (the
+//! honest number, paper Tables 3 and 5), a misalignment diagnostic beside it for validation
+//! runs (bounded by a lab's cutting tolerance, flagged when it sits on the bound), the
+//! interpolation error of the model curves, and which material quantities the data
+//! determine.
+//!
+//! Identifiability (small strain, homogeneous stress): a strip cut at θ from the warp has
+//! 1/E(θ) = cos⁴θ/E1 + sin⁴θ/E2 + (1/G − 2ν12/E1) sin²θ cos²θ with E1 = a11 − a12²/a22,
+//! E2 = a22 − a12²/a11, ν12 = a12/a22 and G = G12/2 (our shear term is G12 Ẽ12²). Strips at
+//! any angles determine E1, E2 and the one combination 1/G − 2ν12/E1, each times the
+//! thickness; a12 and G12 separately only through a measured Poisson ratio or a test beyond
+//! strips.
+
+use super::map::A12Rule;
+use super::preprocess::Strip;
+use super::{mean_abs, FitError, Fitter, TestOutcome};
+use crate::dataset::Role;
+use crate::scene::{CantileverBend, TensileStrip};
+
+impl Fitter<'_> {
+    /// Mean |relative error| of curve `c` with its strip cut at `angle` on a mesh level, and
+    /// the model forces at its points.
+    fn curve_error(
+        &mut self,
+        c: usize,
+        angle: f64,
+        level: (usize, usize),
+    ) -> Result<(f64, Vec<f64>), FitError> {
+        let s = self.prep.curves[c].strip;
+        let node = self.predict(s, angle, level)?;
+        let model = self.curve_forces(c, &node);
+        let r: Vec<f64> = self.prep.curves[c]
+            .points
+            .iter()
+            .zip(&model)
+            .map(|(m, q)| (q - m.1) / m.1)
+            .collect();
+        Ok((mean_abs(&r), model))
+    }
+
+    /// The misalignment Δθ ∈ [−m, m] (m = `max_misalign_deg`) that best explains curve `c`:
+    /// its squared relative error on a grid of at most 1° (strips shared by every repeat),
+    /// refined by the parabola through the best grid point and its neighbours.
+    fn misalignment(&mut self, c: usize, level: (usize, usize)) -> Option<f64> {
+        let m = self.opts.max_misalign_deg;
+        if m <= 0.0 {
+            return None;
+        }
+        let n = (2.0 * m).ceil().max(2.0) as usize;
+        let grid: Vec<f64> = (0..=n)
+            .map(|k| -m + 2.0 * m * k as f64 / n as f64)
+            .collect();
+        let angle = self.prep.curves[c].angle_deg;
+        let costs: Vec<f64> = grid
+            .iter()
+            .map(|&d| match self.curve_error(c, angle + d, level) {
+                Ok((_, model)) => self.prep.curves[c]
+                    .points
+                    .iter()
+                    .zip(&model)
+                    .map(|(p, q)| ((q - p.1) / p.1).powi(2))
+                    .sum(),
+                Err(_) => f64::INFINITY,
+            })
+            .collect();
+        let k = (0..grid.len()).min_by(|&i, &j| costs[i].total_cmp(&costs[j]))?;
+        if k == 0 || k + 1 == grid.len() {
+            return Some(grid[k]);
+        }
+        let (l, mid, r) = (costs[k - 1], costs[k], costs[k + 1]);
+        let curvature = l - 2.0 * mid + r;
+        let h = grid[1] - grid[0];
+        if !(curvature > 0.0 && curvature.is_finite()) {
+            return Some(grid[k]);
+        }
+        Some((grid[k] - h * (0.5 * (r - l) / curvature).clamp(-1.0, 1.0)).clamp(-m, m))
+    }
+
+    /// Largest relative difference between a strip's interpolated model curve and solves
+    /// halfway between its nodes (first mesh level).
+    fn interpolation_error(&mut self, s: usize) -> Result<f64, FitError> {
+        let level = self.opts.ladder[0];
+        let strip: Strip = self.prep.strips[s].clone();
+        let node = self.predict(s, strip.angle_deg, level)?;
+        let mut mids = Vec::new();
+        let mut prev = 0.0;
+        for &e in &strip.nodes {
+            mids.push(0.5 * (prev + e));
+            prev = e;
+        }
+        let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
+        t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
+        t.solver.max_iterations = 500;
+        t.solver.rtol = super::FIT_RTOL;
+        let fail = |source| FitError::Scene {
+            stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
+            source,
+        };
+        let mut rig = t.rig(&self.material(), &mids).map_err(fail)?;
+        let law = self.law.clone();
+        let (solved, _) = self.run_rig(&mut rig, &law, false).map_err(fail)?;
+        let mut worst: f64 = 0.0;
+        for (&e, &f) in mids.iter().zip(&solved) {
+            let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
+                .iter()
+                .map(|&(k, w)| w * node[k])
+                .sum();
+            if f.abs() > 0.0 {
+                worst = worst.max(((interp - f) / f).abs());
+            }
+        }
+        Ok(worst)
+    }
+}
+
+/// Every test's outcome at the final mesh level.
+pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestOutcome>, FitError> {
+    let mut tests = Vec::new();
+    f.say("report: every curve at its nominal angle");
+    for c in 0..f.prep.curves.len() {
+        let curve = f.prep.curves[c].clone();
+        let t = &f.data.tensile[curve.test];
+        let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
+        let (mut misalign, mut aligned) = (None, None);
+        if curve.role == Role::Validation {
+            if let Some(d) = f.misalignment(c, f.opts.ladder[0]) {
+                let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
+                misalign = Some(d);
+                aligned = Some(e);
+                let m = f.opts.max_misalign_deg;
+                if (d.abs() - m).abs() < 1e-9 {
+                    f.notes.push(format!(
+                        "warning: validation {}° ({}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
+                        curve.angle_deg,
+                        t.curve.display()
+                    ));
+                }
+            }
+        }
+        tests.push(TestOutcome {
+            kind: match curve.role {
+                Role::Fit => "tensile",
+                Role::Validation => "validation",
+            },
+            angle_deg: curve.angle_deg,
+            curve: Some(t.curve.display().to_string()),
+            repeat: Some(curve.repeat),
+            avg_rel_error: Some(err),
+            drape_angle_deg: None,
+            target_drape_deg: None,
+            misalign_deg: misalign,
+            avg_rel_error_aligned: aligned,
+            toe: Some(curve.toe),
+            points: curve
+                .points
+                .iter()
+                .zip(&model)
+                .map(|(m, q)| (m.0, m.1, *q))
+                .collect(),
+            used_in_fit: curve.used_in_fit,
+        });
+    }
+    let mut worst: (f64, f64) = (0.0, 0.0);
+    for s in 0..f.prep.strips.len() {
+        let e = f.interpolation_error(s)?;
+        if e > worst.0 {
+            worst = (e, f.prep.strips[s].angle_deg);
+        }
+    }
+    f.notes.push(format!(
+        "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}){}",
+        f.opts.nodes,
+        100.0 * worst.0,
+        worst.1,
+        f.opts.ladder[0].0,
+        f.opts.ladder[0].1,
+        if worst.0 > 1e-3 { "; warning: above 0.1 %, raise the node count" } else { "" }
+    ));
+    let data = f.data;
+    if f.bend_angles.len() != data.bend.len() {
+        // thickness known: the bends are predicted, not fitted
+        f.bend_angles.clear();
+        for b in &data.bend {
+            let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+            bend.mesh = super::stages::bend_mesh(last, b);
+            let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
+                stage: format!("predicting the {}° cantilever", b.angle_deg),
+                source,
+            })?;
+            f.bend_angles.push(r.drape_angle_deg);
+        }
+    }
+    let fitted = data.known.thickness.is_none();
+    for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
+        tests.push(TestOutcome {
+            kind: "bend",
+            angle_deg: b.angle_deg,
+            curve: None,
+            repeat: None,
+            avg_rel_error: None,
+            drape_angle_deg: Some(angle),
+            target_drape_deg: Some(b.drape_angle_deg),
+            misalign_deg: None,
+            avg_rel_error_aligned: None,
+            toe: None,
+            points: Vec::new(),
+            used_in_fit: fitted,
+        });
+    }
+    Ok(tests)
+}
+
+/// Which quantities the data determined and which were assumed, with their values.
+pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> {
+    let l = &f.law;
+    let tau = f.thickness;
+    let e1 = l.a11 - l.a12 * l.a12 / l.a22;
+    let e2 = l.a22 - l.a12 * l.a12 / l.a11;
+    let nu12 = l.a12 / l.a22;
+    let g = 0.5 * l.g12;
+    let mut out = Vec::new();
+    let source = |fitted: bool, known: bool| {
+        if known {
+            "known"
+        } else if fitted {
+            "determined"
+        } else {
+            "assumed"
+        }
+    };
+    let k = &f.data.known;
+    out.push(format!(
+        "E1·τ = {:.5e} N/m (warp, small strain): {}",
+        e1 * tau,
+        source(!strips[0].is_empty(), k.a11.is_some())
+    ));
+    out.push(format!(
+        "E2·τ = {:.5e} N/m (weft, small strain): {}",
+        e2 * tau,
+        source(!strips[1].is_empty(), k.a22.is_some())
+    ));
+    out.push(format!(
+        "(1/G − 2ν12/E1)/τ = {:.5e} m/N (off-axis compliance, small strain): {}",
+        (1.0 / g - 2.0 * nu12 / e1) / tau,
+        source(!strips[2].is_empty(), k.g12.is_some())
+    ));
+    out.push(match f.a12 {
+        A12Rule::HalfMin => format!(
+            "a12 = {:.4e} Pa (ν12 = {nu12:.3}): assumed, ½·min(a11, a22) (the paper's default); strips do not determine it: another a12 with G12 changed to keep 1/G − 2ν12/E1 fits them alike at small strain, so G12 = {:.4e} Pa is tied to this choice (give [known] poisson_12 or a12_pa to pin it)",
+            l.a12, l.g12
+        ),
+        A12Rule::Poisson(nu) => format!(
+            "a12 = {:.4e} Pa: from the known ν12 = {nu} (a12 = ν12·a22); G12 = {:.4e} Pa determined with it",
+            l.a12, l.g12
+        ),
+        A12Rule::Fixed(v) => format!("a12 = {v:.4e} Pa: known; G12 = {:.4e} Pa determined with it", l.g12),
+    });
+    out.push(if k.thickness.is_some() {
+        format!("thickness τ = {:.4} mm: known", tau * 1e3)
+    } else if f.data.bend.is_empty() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
+            tau * 1e3
+        )
+    } else {
+        format!(
+            "thickness τ = {:.4} mm: determined by the bends (bending rigidity a·τ³/12 with a·τ held)",
+            tau * 1e3
+        )
+    });
+    out
+}

@@ -1,0 +1,259 @@
+//! `ks-fit fit` on curves as labs hand them over: slack and preload (toe compensation), forces
+//! in kN or from several strips pulled together, machine-export headers, repeated
+//! elongations, and a bias-extension sample with known yarn stiffnesses. The curves start from
+//! the virtual lab (a known material) and are then spoiled the way real exports are; the fit
+//! must give back the material's stiffness as if they were clean.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn ks_fit(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run ks-fit");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn folder(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("kshell-fitlab-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Warp and weft stiffen, shear linear; a12 the paper's default.
+const MATERIAL: &str = "name = \"lab\"
+areal_density_g_m2 = 103.6
+thickness_mm = 0.18
+a11_pa = 2.0e8
+a22_pa = 1.2e8
+g12_pa = 4.0e6
+[warp]
+mu = [0.6, 0.4]
+alpha = [1.0, 150.0]
+[weft]
+mu = [0.8, 0.2]
+alpha = [1.0, 100.0]
+";
+
+/// (elongation mm, force N) rows of a curve file written by `ks-fit synth`.
+fn read_curve(p: &Path) -> Vec<(f64, f64)> {
+    std::fs::read_to_string(p)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let mut it = l.split(',').map(|v| v.trim().parse::<f64>().unwrap());
+            (it.next().unwrap(), it.next().unwrap())
+        })
+        .collect()
+}
+
+/// A clean synthetic dataset of `MATERIAL` on the fit's first mesh: 24 points per curve.
+fn clean_dataset(tag: &str) -> PathBuf {
+    let dir = folder(tag);
+    let material = dir.join("material.toml");
+    std::fs::write(&material, MATERIAL).unwrap();
+    let data = dir.join("clean");
+    let (rc, out, err) = ks_fit(&[
+        "synth",
+        "--material",
+        s(&material),
+        "--out",
+        s(&data),
+        "--points",
+        "24",
+        "--max-strain",
+        "0.05",
+        "--mesh",
+        "8x12",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    data
+}
+
+fn tensile(angle: f64, curve: &str, extra: &str) -> String {
+    format!(
+        "\n[[tensile]]\nangle_deg = {angle}\nwidth_mm = 50\ngauge_length_mm = 75\ncurve = \"{curve}\"\n{extra}"
+    )
+}
+
+fn fit_table(out: &str, curve: &str) -> Vec<String> {
+    out.lines()
+        .find(|l| l.contains(curve) && l.starts_with("tensile"))
+        .unwrap_or_else(|| panic!("no row for {curve}: {out}"))
+        .split_whitespace()
+        .map(str::to_string)
+        .collect()
+}
+
+#[test]
+fn slack_preload_kn_parallel_strips_and_duplicates_are_undone() {
+    let clean = clean_dataset("artefacts");
+    let warp = read_curve(&clean.join("warp-1.csv"));
+    let weft = read_curve(&clean.join("weft-1.csv"));
+    let dir = clean.parent().unwrap().join("lab");
+    std::fs::create_dir_all(&dir).unwrap();
+    let fwarp = warp.last().unwrap().1;
+    // 1. 1 mm of slack: the force creeps up (0.5 % of the largest) before the strip is taut
+    let mut rows = String::from("elongation_mm,force_n\n0,0\n");
+    for k in 1..=8 {
+        let e = k as f64 / 8.0;
+        rows += &format!("{e},{}\n", 0.005 * fwarp * e * e);
+    }
+    for &(e, f) in &warp {
+        if e > 0.0 {
+            rows += &format!("{},{f}\n", e + 1.0);
+        }
+    }
+    std::fs::write(dir.join("warp-slack.csv"), rows).unwrap();
+    // 2. preload: the machine zeroed 0.3 mm into the curve (the first rows dropped)
+    let shifted: Vec<(f64, f64)> = warp
+        .iter()
+        .filter(|p| p.0 >= 0.3)
+        .map(|&(e, f)| (e - 0.3, f))
+        .collect();
+    let mut rows = String::from("elongation_mm,force_n\n");
+    for (e, f) in &shifted {
+        rows += &format!("{e},{f}\n");
+    }
+    std::fs::write(dir.join("warp-preload.csv"), rows).unwrap();
+    // 3. a machine export in kN with metadata and quoted headers
+    let mut rows = String::from(
+        "Specimen,weft 1\nRate,50 mm/min\n\"Time (s)\",\"Extension (mm)\",\"Load (kN)\"\n",
+    );
+    for (i, &(e, f)) in weft.iter().enumerate() {
+        rows += &format!("{i},{e},{}\n", f / 1000.0);
+    }
+    std::fs::write(dir.join("weft-kn.csv"), rows).unwrap();
+    // 4. three strips pulled together, each row twice (an extensometer's resolution)
+    let mut rows = String::from("elongation_mm,force_n\n");
+    for &(e, f) in &weft {
+        rows += &format!("{e},{}\n{e},{}\n", 3.0 * f * 0.99, 3.0 * f * 1.01);
+    }
+    std::fs::write(dir.join("weft-three.csv"), rows).unwrap();
+    let toml = String::from("name = \"lab\"\nthickness_mm = 0.18\n")
+        + &tensile(90.0, "warp-slack.csv", "")
+        + &tensile(90.0, "warp-preload.csv", "")
+        + &tensile(0.0, "weft-kn.csv", "")
+        + &tensile(0.0, "weft-three.csv", "force_scale = 0.3333333333333333\n");
+    let fabric = dir.join("fabric.toml");
+    std::fs::write(&fabric, toml).unwrap();
+
+    let (rc, out, err) = ks_fit(&["check", s(&fabric)]);
+    assert_eq!(rc, 0, "{out}{err}");
+    let fitted = dir.join("fitted.toml");
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&fabric),
+        "-o",
+        s(&fitted),
+        "--mesh-ladder",
+        "8x12",
+        "--quiet",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    // the toes found: 1 mm of slack, 0.3 mm of preload
+    let slack = fit_table(&out, "warp-slack.csv");
+    let toe: f64 = slack[slack.len() - 2].parse().unwrap();
+    assert!((toe - 1.0).abs() < 0.05, "slack toe {toe} mm: {out}");
+    let pre = fit_table(&out, "warp-preload.csv");
+    let toe: f64 = pre[pre.len() - 2].parse().unwrap();
+    assert!((toe + 0.3).abs() < 0.05, "preload toe {toe} mm: {out}");
+    for curve in [
+        "warp-slack.csv",
+        "warp-preload.csv",
+        "weft-kn.csv",
+        "weft-three.csv",
+    ] {
+        let row = fit_table(&out, curve);
+        let e: f64 = row[3].parse().unwrap();
+        assert!(e < 1.5, "{curve}: {e} % {out}");
+    }
+    // the material's small-strain stiffnesses come back (a·τ: the strips determine it)
+    let m = kshell::material::load_material(&fitted).unwrap();
+    let (a11t, a22t) = (m.law.a11 * m.thickness, m.law.a22 * m.thickness);
+    let (want11, want22) = (2.0e8 * 0.18e-3, 1.2e8 * 0.18e-3);
+    assert!(
+        (a11t / want11 - 1.0).abs() < 0.05,
+        "a11·τ {a11t} vs {want11}"
+    );
+    assert!(
+        (a22t / want22 - 1.0).abs() < 0.05,
+        "a22·τ {a22t} vs {want22}"
+    );
+}
+
+#[test]
+fn forces_that_look_like_kn_are_refused_until_scaled() {
+    let dir = folder("kn");
+    std::fs::write(
+        dir.join("warp.csv"),
+        "elongation_mm,force_n\n0.75,0.0205\n1.5,0.041\n3,0.08\n",
+    )
+    .unwrap();
+    let base = "name = \"x\"\nthickness_mm = 0.2\n".to_string() + &tensile(90.0, "warp.csv", "");
+    std::fs::write(dir.join("fabric.toml"), &base).unwrap();
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&dir.join("fabric.toml")),
+        "-o",
+        s(&dir.join("o.toml")),
+    ]);
+    assert_eq!(rc, 2, "{out}{err}");
+    assert!(err.contains("force_scale = 1000"), "{err}");
+    assert!(!dir.join("o.toml").exists());
+    // every force zero: refused, not a panic
+    std::fs::write(dir.join("warp.csv"), "elongation_mm,force_n\n1,0\n2,0\n").unwrap();
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&dir.join("fabric.toml")),
+        "-o",
+        s(&dir.join("o.toml")),
+    ]);
+    assert_eq!(rc, 2, "{out}{err}");
+    assert!(err.contains("every force is zero"), "{err}");
+}
+
+#[test]
+fn a_bias_sample_alone_fits_the_shear_with_known_yarns() {
+    let clean = clean_dataset("bias-only");
+    let dir = clean.parent().unwrap().join("bias");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(clean.join("bias-1.csv"), dir.join("bias.csv")).unwrap();
+    // the yarns' law as in MATERIAL, linear here: the strips stay below 5 % strain where the
+    // bias strip barely stretches its yarns
+    let toml = String::from("name = \"bias\"\nthickness_mm = 0.18\n")
+        + &tensile(45.0, "bias.csv", "")
+        + "\n[known]\na11_pa = 2.0e8\na22_pa = 1.2e8\nthickness_mm = 0.18\n";
+    std::fs::write(dir.join("fabric.toml"), toml).unwrap();
+    let fitted = dir.join("fitted.toml");
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&dir.join("fabric.toml")),
+        "-o",
+        s(&fitted),
+        "--mesh-ladder",
+        "8x12",
+        "--quiet",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    let m = kshell::material::load_material(&fitted).unwrap();
+    assert_eq!(m.law.a11, 2.0e8, "known values are held");
+    assert_eq!(m.law.a22, 1.2e8);
+    assert!((m.law.g12 / 4.0e6 - 1.0).abs() < 0.05, "G12 {}", m.law.g12);
+    let row = fit_table(&out, "bias.csv");
+    let e: f64 = row[3].parse().unwrap();
+    assert!(e < 1.5, "bias error {e} %: {out}");
+    assert!(out.contains("G12") && out.contains("known"), "{out}");
+}
