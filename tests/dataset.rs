@@ -128,12 +128,12 @@ fn check_errors_name_file_and_line_with_exit_code_2() {
         ),
         (
             TOML.to_string(),
-            "elongation_mm,force_n\n1,2\n1,3\n".into(),
-            "warp-1.csv:3: column 1 (elongation_mm) = 1 does not exceed",
+            "elongation_mm,force_n\n1,2\n0.5,3\n".into(),
+            "warp-1.csv:3: column 1 (elongation_mm) = 0.5 is below the previous row's 1",
         ),
         (
             TOML.to_string(),
-            "elongation_mm;force_n\n1;2\n".into(),
+            "elong;force\n1;2\n".into(),
             "warp-1.csv:1: the header must be",
         ),
         (

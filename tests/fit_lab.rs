@@ -222,7 +222,12 @@ fn forces_that_look_like_kn_are_refused_until_scaled() {
         s(&dir.join("o.toml")),
     ]);
     assert_eq!(rc, 2, "{out}{err}");
-    assert!(err.contains("every force is zero"), "{err}");
+    assert!(
+        err.contains("warp.csv:1: column 2 (force_n): every force is zero"),
+        "{err}"
+    );
+    let (rc, out, _) = ks_fit(&["check", s(&dir.join("fabric.toml"))]);
+    assert_eq!(rc, 2, "check refuses it too: {out}");
 }
 
 #[test]

@@ -138,7 +138,7 @@ enum Command {
         #[arg(long, default_value_t = 2.0)]
         max_misalign: f64,
         /// Elongation nodes per strip at which the model is solved (interpolated between).
-        #[arg(long, default_value_t = 10)]
+        #[arg(long, default_value_t = 12)]
         nodes: usize,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test

@@ -317,6 +317,15 @@ pub(super) fn parse_curve(
         return Err(err(header_line, "no data rows after the header".into()));
     }
     let fmax = c.force_n.iter().copied().fold(0.0, f64::max);
+    if fmax <= 0.0 && c.force_n.iter().all(|&x| x == 0.0) {
+        return Err(err(
+            header_line,
+            format!(
+                "column {} (force_n): every force is zero: nothing to fit (is it the force column?)",
+                f.index + 1
+            ),
+        ));
+    }
     if let Some(i) = c
         .force_n
         .iter()

@@ -129,6 +129,65 @@ impl Fitter<'_> {
         out
     }
 
+    /// Node forces of several (strip, angle) pairs on a mesh level with the current material,
+    /// the strips solved side by side (independent solves, so the results are those of
+    /// solving them one after another, bit for bit).
+    pub(super) fn predict_many(
+        &mut self,
+        jobs: &[(usize, f64)],
+        level: (usize, usize),
+    ) -> Result<Vec<Vec<f64>>, FitError> {
+        use rayon::prelude::*;
+        let law = self.law.clone();
+        let mut params = law.params();
+        params.push(self.thickness);
+        let bits: Vec<u64> = params.iter().map(|v| v.to_bits()).collect();
+        let mut todo: Vec<(RigKey, StripRig, f64)> = Vec::new();
+        for &(s, angle) in jobs {
+            let (key, rig) = self.strip_rig(s, angle, level)?;
+            if self.predictions.contains_key(&(key.clone(), bits.clone()))
+                || todo.iter().any(|t| t.0 == key)
+            {
+                self.keep_rig(key, rig);
+            } else {
+                todo.push((key, rig, angle));
+            }
+        }
+        let tau = self.thickness;
+        let results: Vec<Result<Vec<crate::scene::TensilePoint>, SceneError>> = todo
+            .par_iter_mut()
+            .map(|(_, rig, _)| {
+                rig.set_material(&law, tau)?;
+                rig.run(false)
+            })
+            .collect();
+        let mut failed = None;
+        for ((key, rig, angle), r) in todo.into_iter().zip(results) {
+            match r {
+                Ok(pts) => {
+                    self.stats.evaluations += 1;
+                    self.stats.newton_iterations +=
+                        pts.iter().map(|p| p.report.iterations).sum::<usize>();
+                    let f: Vec<f64> = pts.iter().map(|p| p.force).collect();
+                    self.predictions.insert((key.clone(), bits.clone()), f);
+                }
+                Err(source) => {
+                    failed.get_or_insert(FitError::Scene {
+                        stage: format!("predicting the {angle}° strip"),
+                        source,
+                    });
+                }
+            }
+            self.keep_rig(key, rig);
+        }
+        if let Some(e) = failed {
+            return Err(e);
+        }
+        jobs.iter()
+            .map(|&(s, angle)| self.predict(s, angle, level))
+            .collect()
+    }
+
     /// A curve's model forces at its points, interpolated from its strip's node forces.
     pub(super) fn curve_forces(&self, c: usize, node_forces: &[f64]) -> Vec<f64> {
         let curve = &self.prep.curves[c];

@@ -9,6 +9,7 @@ use super::{to_evaluation, FitError, Fitter, StrainRange, TRIAL_RETRY_ITERATIONS
 use crate::dataset::BendTest;
 use crate::material::Orthotropic;
 use crate::scene::{BendRig, CantileverBend, SceneError};
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// A cantilever mesh at a ladder level (4 × (overhang / 6.25 mm) at 8 × 12, doubled per level).
@@ -226,12 +227,20 @@ impl Fitter<'_> {
             let mut law = base.clone();
             map.decode(q, &mut law);
             let (mut r, mut j) = (Vec::new(), Vec::new());
-            for (((_, rig), &s), cs) in rigs.iter_mut().zip(strips).zip(&curves) {
-                rig.set_material(&law, tau)?;
-                // the stage's first evaluation must succeed; later ones are trials
-                rig.retry_iterations = (evals > 0).then_some(TRIAL_RETRY_ITERATIONS);
-                let pts = rig.run(jac);
-                rig.retry_iterations = None;
+            // the strips are independent: solved side by side, residuals gathered in order
+            let retry = (evals > 0).then_some(TRIAL_RETRY_ITERATIONS);
+            let runs: Vec<Result<Vec<crate::scene::TensilePoint>, SceneError>> = rigs
+                .par_iter_mut()
+                .map(|(_, rig)| {
+                    rig.set_material(&law, tau)?;
+                    // the stage's first evaluation must succeed; later ones are trials
+                    rig.retry_iterations = retry;
+                    let pts = rig.run(jac);
+                    rig.retry_iterations = None;
+                    pts
+                })
+                .collect();
+            for ((pts, &s), cs) in runs.into_iter().zip(strips).zip(&curves) {
                 let pts = pts?;
                 newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
                 let forces: Vec<f64> = pts.iter().map(|p| p.force).collect();
@@ -530,11 +539,15 @@ impl Fitter<'_> {
         strips: &[usize],
         level: (usize, usize),
     ) -> Result<Vec<f64>, FitError> {
+        let jobs: Vec<(usize, f64)> = strips
+            .iter()
+            .map(|&s| (s, self.prep.strips[s].angle_deg))
+            .collect();
+        let nodes = self.predict_many(&jobs, level)?;
         let mut out = Vec::new();
-        for &s in strips {
-            let node = self.predict(s, self.prep.strips[s].angle_deg, level)?;
+        for (&s, node) in strips.iter().zip(&nodes) {
             for c in self.used_curves(&[s]) {
-                out.extend(self.curve_forces(c, &node));
+                out.extend(self.curve_forces(c, node));
             }
         }
         Ok(out)

@@ -12,7 +12,6 @@
 //! strips.
 
 use super::map::A12Rule;
-use super::preprocess::Strip;
 use super::{mean_abs, FitError, Fitter, TestOutcome};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
@@ -51,6 +50,10 @@ impl Fitter<'_> {
             .map(|k| -m + 2.0 * m * k as f64 / n as f64)
             .collect();
         let angle = self.prep.curves[c].angle_deg;
+        let s = self.prep.curves[c].strip;
+        // solve the grid's strips side by side; a failed one costs +∞ below
+        let jobs: Vec<(usize, f64)> = grid.iter().map(|d| (s, angle + d)).collect();
+        let _ = self.predict_many(&jobs, level);
         let costs: Vec<f64> = grid
             .iter()
             .map(|&d| match self.curve_error(c, angle + d, level) {
@@ -76,37 +79,59 @@ impl Fitter<'_> {
         Some((grid[k] - h * (0.5 * (r - l) / curvature).clamp(-1.0, 1.0)).clamp(-m, m))
     }
 
-    /// Largest relative difference between a strip's interpolated model curve and solves
-    /// halfway between its nodes (first mesh level).
-    fn interpolation_error(&mut self, s: usize) -> Result<f64, FitError> {
+    /// Largest relative difference between each strip's interpolated model curve and solves
+    /// halfway between its nodes (first mesh level), strips solved side by side: (error,
+    /// angle) of the worst strip.
+    fn interpolation_error(&mut self) -> Result<(f64, f64), FitError> {
+        use rayon::prelude::*;
         let level = self.opts.ladder[0];
-        let strip: Strip = self.prep.strips[s].clone();
-        let node = self.predict(s, strip.angle_deg, level)?;
-        let mut mids = Vec::new();
-        let mut prev = 0.0;
-        for &e in &strip.nodes {
-            mids.push(0.5 * (prev + e));
-            prev = e;
+        let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
+            .map(|s| (s, self.prep.strips[s].angle_deg))
+            .collect();
+        let nodes = self.predict_many(&jobs, level)?;
+        let material = self.material();
+        let mut checks = Vec::new();
+        for strip in &self.prep.strips {
+            let mut mids = Vec::new();
+            let mut prev = 0.0;
+            for &e in &strip.nodes {
+                mids.push(0.5 * (prev + e));
+                prev = e;
+            }
+            let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
+            t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
+            t.solver.max_iterations = 500;
+            t.solver.rtol = super::FIT_RTOL;
+            let rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
+                stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
+                source,
+            })?;
+            checks.push((mids, rig));
         }
-        let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
-        t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
-        t.solver.max_iterations = 500;
-        t.solver.rtol = super::FIT_RTOL;
-        let fail = |source| FitError::Scene {
-            stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
-            source,
-        };
-        let mut rig = t.rig(&self.material(), &mids).map_err(fail)?;
-        let law = self.law.clone();
-        let (solved, _) = self.run_rig(&mut rig, &law, false).map_err(fail)?;
-        let mut worst: f64 = 0.0;
-        for (&e, &f) in mids.iter().zip(&solved) {
-            let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
-                .iter()
-                .map(|&(k, w)| w * node[k])
-                .sum();
-            if f.abs() > 0.0 {
-                worst = worst.max(((interp - f) / f).abs());
+        let solved: Vec<_> = checks
+            .par_iter_mut()
+            .map(|(_, rig)| rig.run(false))
+            .collect();
+        let mut worst = (0.0f64, 0.0);
+        for (s, ((mids, _), run)) in checks.iter().zip(solved).enumerate() {
+            let strip = &self.prep.strips[s];
+            let pts = run.map_err(|source| FitError::Scene {
+                stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
+                source,
+            })?;
+            self.stats.evaluations += 1;
+            self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+            for (&e, p) in mids.iter().zip(&pts) {
+                let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
+                    .iter()
+                    .map(|&(k, w)| w * nodes[s][k])
+                    .sum();
+                if p.force.abs() > 0.0 {
+                    let r = ((interp - p.force) / p.force).abs();
+                    if r > worst.0 {
+                        worst = (r, strip.angle_deg);
+                    }
+                }
             }
         }
         Ok(worst)
@@ -117,6 +142,10 @@ impl Fitter<'_> {
 pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestOutcome>, FitError> {
     let mut tests = Vec::new();
     f.say("report: every curve at its nominal angle");
+    let jobs: Vec<(usize, f64)> = (0..f.prep.strips.len())
+        .map(|s| (s, f.prep.strips[s].angle_deg))
+        .collect();
+    f.predict_many(&jobs, last)?;
     for c in 0..f.prep.curves.len() {
         let curve = f.prep.curves[c].clone();
         let t = &f.data.tensile[curve.test];
@@ -160,13 +189,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             used_in_fit: curve.used_in_fit,
         });
     }
-    let mut worst: (f64, f64) = (0.0, 0.0);
-    for s in 0..f.prep.strips.len() {
-        let e = f.interpolation_error(s)?;
-        if e > worst.0 {
-            worst = (e, f.prep.strips[s].angle_deg);
-        }
-    }
+    let worst = f.interpolation_error()?;
     f.notes.push(format!(
         "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}){}",
         f.opts.nodes,

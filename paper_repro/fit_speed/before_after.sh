@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# Wall and CPU time of `ks-fit fit` on the five bundled fabrics, for the working tree's binary
+# and for the binary of an earlier commit, run one after the other on this machine (default
+# settings both; the earlier commit's defaults are its own). Usage:
+#   bash paper_repro/fit_speed/before_after.sh COMMIT [RUNS]
+# Writes paper_repro/fit_speed/before_after.md with the median of RUNS runs (default 1).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+base_commit=${1:?usage: before_after.sh COMMIT [RUNS]}
+runs=${2:-1}
+root=$(pwd)
+tmp=$(mktemp -d)
+trap 'git worktree remove --force "$tmp/base" >/dev/null 2>&1 || true; rm -rf "$tmp"' EXIT
+git worktree add -q "$tmp/base" "$base_commit"
+# the earlier commit shares this tree's release dependencies (only kshell itself is rebuilt)
+(cd "$tmp/base" && cargo build --release --bin ks-fit --target-dir "$root/target" -q)
+cp target/release/ks-fit "$tmp/ks-fit-base"
+cargo build --release --bin ks-fit -q
+cp target/release/ks-fit "$tmp/ks-fit-new"
+median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+{
+  echo "# ks-fit fit: before ($base_commit) and after (working tree)"
+  echo
+  echo "Machine: $(nproc) cores. Command: \`bash paper_repro/fit_speed/before_after.sh $base_commit $runs\`;"
+  echo "median of $runs run(s) per binary; wall and CPU (user + system) seconds."
+  echo
+  echo "| fabric | before wall s | before CPU s | after wall s | after CPU s |"
+  echo "|---|---|---|---|---|"
+} > "$tmp/table.md"
+for f in canvas cotton silk denim wool; do
+  row="| $f"
+  for which in base new; do
+    walls=(); cpus=()
+    for _ in $(seq "$runs"); do
+      /usr/bin/time -f "%e %U %S" -o "$tmp/t" "$tmp/ks-fit-$which" fit \
+        paper_repro/fabrics/$f/fabric.toml -o "$tmp/$f-$which.toml" --quiet > /dev/null 2>&1
+      read -r wall user sys < "$tmp/t"
+      walls+=("$wall"); cpus+=("$(echo "$user + $sys" | bc)")
+    done
+    row="$row | $(printf '%s\n' "${walls[@]}" | median) | $(printf '%s\n' "${cpus[@]}" | median)"
+  done
+  echo "$row |" >> "$tmp/table.md"
+done
+cp "$tmp/table.md" paper_repro/fit_speed/before_after.md
+cat paper_repro/fit_speed/before_after.md
