@@ -74,8 +74,8 @@ fn check_summarises_a_good_dataset() {
         "thickness: 0.18 mm",
         "tests: 2 tensile, 1 bend",
         "fitted (warp-1.csv)",
-        "validation (a22.5-1.csv)",
-        "info: tensile 22.5° (a22.5-1.csv) is not at 0, 45 or 90°",
+        "fitted (a22.5-1.csv)",
+        "info: tensile 22.5° (a22.5-1.csv) is not at 0, 45 or 90°: fitted by default",
         "fitted (drape 41.5°)",
         "valid",
     ] {

@@ -88,13 +88,23 @@ fn tensile(angle: f64, curve: &str, extra: &str) -> String {
     )
 }
 
-fn fit_table(out: &str, curve: &str) -> Vec<String> {
-    out.lines()
-        .find(|l| l.contains(curve) && l.starts_with("tensile"))
-        .unwrap_or_else(|| panic!("no row for {curve}: {out}"))
-        .split_whitespace()
-        .map(str::to_string)
-        .collect()
+/// The `[[fit.test]]` entry of `curve` in a fitted material file.
+fn fit_test(fitted: &Path, curve: &str) -> toml::Table {
+    let doc: toml::Table = std::fs::read_to_string(fitted).unwrap().parse().unwrap();
+    doc["fit"]["test"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|t| t.as_table())
+        .find(|t| t.get("curve").and_then(|c| c.as_str()) == Some(curve))
+        .unwrap_or_else(|| panic!("no [[fit.test]] for {curve}"))
+        .clone()
+}
+
+fn number(t: &toml::Table, key: &str) -> f64 {
+    t[key]
+        .as_float()
+        .unwrap_or_else(|| panic!("{key} in {t:?}"))
 }
 
 #[test]
@@ -164,11 +174,9 @@ fn slack_preload_kn_parallel_strips_and_duplicates_are_undone() {
     ]);
     assert_eq!(rc, 0, "{out}{err}");
     // the toes found: 1 mm of slack, 0.3 mm of preload
-    let slack = fit_table(&out, "warp-slack.csv");
-    let toe: f64 = slack[slack.len() - 2].parse().unwrap();
+    let toe = number(&fit_test(&fitted, "warp-slack.csv"), "toe_mm");
     assert!((toe - 1.0).abs() < 0.05, "slack toe {toe} mm: {out}");
-    let pre = fit_table(&out, "warp-preload.csv");
-    let toe: f64 = pre[pre.len() - 2].parse().unwrap();
+    let toe = number(&fit_test(&fitted, "warp-preload.csv"), "toe_mm");
     assert!((toe + 0.3).abs() < 0.05, "preload toe {toe} mm: {out}");
     for curve in [
         "warp-slack.csv",
@@ -176,9 +184,8 @@ fn slack_preload_kn_parallel_strips_and_duplicates_are_undone() {
         "weft-kn.csv",
         "weft-three.csv",
     ] {
-        let row = fit_table(&out, curve);
-        let e: f64 = row[3].parse().unwrap();
-        assert!(e < 1.5, "{curve}: {e} % {out}");
+        let e = number(&fit_test(&fitted, curve), "avg_rel_error");
+        assert!(e < 0.015, "{curve}: {e} {out}");
     }
     // the material's small-strain stiffnesses come back (a·τ: the strips determine it)
     let m = kshell::material::load_material(&fitted).unwrap();
@@ -213,6 +220,26 @@ fn forces_that_look_like_kn_are_refused_until_scaled() {
     assert_eq!(rc, 2, "{out}{err}");
     assert!(err.contains("force_scale = 1000"), "{err}");
     assert!(!dir.join("o.toml").exists());
+    // check says so before any fit runs
+    let (rc, out, err) = ks_fit(&["check", s(&dir.join("fabric.toml"))]);
+    assert_eq!(rc, 0, "{out}{err}");
+    assert!(
+        out.contains("ks-fit fit would refuse it") && out.contains("force_scale"),
+        "{out}"
+    );
+    // with the scale, the same curve is taken as kN and fitted
+    std::fs::write(
+        dir.join("fabric.toml"),
+        base.replace(
+            "curve = \"warp.csv\"",
+            "curve = \"warp.csv\"\nforce_scale = 1000",
+        ),
+    )
+    .unwrap();
+    let (rc, out, _) = ks_fit(&["check", s(&dir.join("fabric.toml"))]);
+    assert_eq!(rc, 0, "{out}");
+    assert!(!out.contains("would refuse"), "{out}");
+    std::fs::write(dir.join("fabric.toml"), &base).unwrap();
     // every force zero: refused, not a panic
     std::fs::write(dir.join("warp.csv"), "elongation_mm,force_n\n1,0\n2,0\n").unwrap();
     let (rc, out, err) = ks_fit(&[
@@ -257,8 +284,7 @@ fn a_bias_sample_alone_fits_the_shear_with_known_yarns() {
     assert_eq!(m.law.a11, 2.0e8, "known values are held");
     assert_eq!(m.law.a22, 1.2e8);
     assert!((m.law.g12 / 4.0e6 - 1.0).abs() < 0.05, "G12 {}", m.law.g12);
-    let row = fit_table(&out, "bias.csv");
-    let e: f64 = row[3].parse().unwrap();
-    assert!(e < 1.5, "bias error {e} %: {out}");
+    let e = number(&fit_test(&fitted, "bias.csv"), "avg_rel_error");
+    assert!(e < 0.015, "bias error {e}: {out}");
     assert!(out.contains("G12") && out.contains("known"), "{out}");
 }

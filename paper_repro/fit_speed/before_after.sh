@@ -35,7 +35,7 @@ for f in canvas cotton silk denim wool; do
       /usr/bin/time -f "%e %U %S" -o "$tmp/t" "$tmp/ks-fit-$which" fit \
         paper_repro/fabrics/$f/fabric.toml -o "$tmp/$f-$which.toml" --quiet > /dev/null 2>&1
       read -r wall user sys < "$tmp/t"
-      walls+=("$wall"); cpus+=("$(echo "$user + $sys" | bc)")
+      walls+=("$wall"); cpus+=("$(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')")
     done
     row="$row | $(printf '%s\n' "${walls[@]}" | median) | $(printf '%s\n' "${cpus[@]}" | median)"
   done

@@ -970,21 +970,41 @@ fn cmd_check(file: &std::path::Path) -> Result<(), String> {
         "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"
     );
     let mut info = Vec::new();
-    for t in &data.tensile {
+    // what `ks-fit fit` will do with each curve by default (no solves: roles, toes, repeats)
+    use kshell::fit::preprocess::{prepare, RepeatMode, ToeMode};
+    let prep = prepare(&data, false, RepeatMode::All, ToeMode::Auto, 12);
+    for (i, t) in data.tensile.iter().enumerate() {
         let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let max_elong = t.elongation.last().copied().unwrap_or(0.0);
-        let role = if t.is_fitted() {
-            "fitted"
-        } else {
+        let role = match t.role(false) {
+            kshell::dataset::Role::Fit => "fitted",
+            kshell::dataset::Role::Validation => "validation",
+        };
+        if t.role.is_none() && !t.is_fitted() {
             info.push(format!(
-                "info: tensile {}° ({}) is not at 0, 45 or 90°: a validation test (predicted, not fitted)",
+                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
                 t.angle_deg,
                 t.curve.display()
             ));
-            "validation"
+        }
+        let toe = match &prep {
+            Ok(p) => p
+                .curves
+                .iter()
+                .find(|c| c.test == i)
+                .filter(|c| c.toe != 0.0)
+                .map(|c| {
+                    format!(
+                        ", toe {:.3} mm {}",
+                        c.toe * 1e3,
+                        if c.toe_auto { "detected" } else { "given" }
+                    )
+                })
+                .unwrap_or_default(),
+            Err(_) => String::new(),
         };
         println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14.4} {:>12.4}  {role} ({})",
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14.4} {:>12.4}  {role} ({}{toe})",
             "tensile",
             t.angle_deg,
             t.width * 1e3,
@@ -996,8 +1016,13 @@ fn cmd_check(file: &std::path::Path) -> Result<(), String> {
         );
     }
     for b in &data.bend {
+        let role = if data.known.thickness.is_some() {
+            "predicted: thickness known"
+        } else {
+            "fitted"
+        };
         println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  fitted (drape {}°)",
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
             "bend",
             b.angle_deg,
             b.width * 1e3,
@@ -1008,6 +1033,31 @@ fn cmd_check(file: &std::path::Path) -> Result<(), String> {
             b.drape_angle_deg
         );
     }
+    let k = &data.known;
+    for (name, v) in [
+        ("a11_pa", k.a11),
+        ("a22_pa", k.a22),
+        ("a12_pa", k.a12),
+        ("g12_pa", k.g12),
+        ("thickness_mm", k.thickness.map(|t| t * 1e3)),
+        ("poisson_12", k.poisson_12),
+    ] {
+        if let Some(v) = v {
+            info.push(format!("known: {name} = {v} (held by the fit)"));
+        }
+    }
+    let fitted_at = |a: f64| {
+        data.tensile
+            .iter()
+            .any(|t| (t.angle_deg - a).abs() < 1e-9 && t.role(false) == kshell::dataset::Role::Fit)
+    };
+    let refusal = match &prep {
+        Err(e) => Some(e.to_string()),
+        Ok(_) if !fitted_at(90.0) && !fitted_at(0.0) && k.a11.is_none() && k.a22.is_none() => Some(
+            "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa".into(),
+        ),
+        Ok(_) => None,
+    };
     for l in &info {
         println!("{l}");
     }
@@ -1015,12 +1065,15 @@ fn cmd_check(file: &std::path::Path) -> Result<(), String> {
         println!("{w}");
     }
     println!(
-        "valid{}",
+        "valid{}{}",
         match warnings.len() {
             0 => String::new(),
             1 => " (1 warning)".into(),
             n => format!(" ({n} warnings)"),
-        }
+        },
+        refusal
+            .map(|why| format!("; ks-fit fit would refuse it: {why}"))
+            .unwrap_or_default()
     );
     Ok(())
 }

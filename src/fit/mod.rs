@@ -130,6 +130,10 @@ pub struct TestOutcome {
     pub avg_rel_error_aligned: Option<f64>,
     /// toe removed, m (negative: preload)
     pub toe: Option<f64>,
+    /// the strip's real mesh on the last level (faces across × along)
+    pub mesh: Option<(usize, usize)>,
+    /// estimated discretisation error of the curve there (mean relative)
+    pub mesh_error_est: Option<f64>,
     /// (elongation m, measured N, fitted N) at every point used
     pub points: Vec<(f64, f64, f64)>,
     pub used_in_fit: bool,
@@ -144,6 +148,9 @@ pub struct FitStats {
     /// homogeneous-strip evaluations of the bootstrap (each a few microseconds)
     pub bootstrap_evaluations: usize,
     pub newton_iterations: usize,
+    /// equilibria of the tensile stages that ended unstable (saddles of wrinkling strips):
+    /// their forces kept, their sensitivities from a regularised tangent
+    pub unstable_solves: usize,
     /// (stage, seconds)
     pub stage_seconds: Vec<(String, f64)>,
 }
@@ -407,6 +414,12 @@ pub fn fit(
     let t0 = Instant::now();
     let tests = validation::outcomes(&mut f, last)?;
     let identifiability = validation::identifiability(&f, &strips);
+    if f.stats.unstable_solves > 0 {
+        let n = f.stats.unstable_solves;
+        f.notes.push(format!(
+            "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip wrinkles there); their forces were kept and their sensitivities taken from a regularised tangent"
+        ));
+    }
     f.time_stage("report", t0);
     f.stats.seconds = f.start.elapsed().as_secs_f64();
     let material = f.material();

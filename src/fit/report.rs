@@ -64,6 +64,12 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         if let Some(toe) = t.toe {
             let _ = writeln!(s, "toe_mm = {:.4}", toe * 1e3);
         }
+        if let Some((nx, ny)) = t.mesh {
+            let _ = writeln!(s, "mesh = \"{nx}x{ny}\"");
+        }
+        if let Some(m) = t.mesh_error_est {
+            let _ = writeln!(s, "mesh_error_est = {m:.6}");
+        }
         if !t.points.is_empty() {
             let _ = writeln!(s, "points = {}", t.points.len());
         }
@@ -84,7 +90,7 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
 /// The per-test table printed at the end of a fit.
 pub fn table(r: &FitResult) -> String {
     let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>6}\n",
+        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}\n",
         "kind",
         "angle",
         "curve",
@@ -93,13 +99,15 @@ pub fn table(r: &FitResult) -> String {
         "misalign_deg",
         "aligned_error",
         "toe_mm",
+        "mesh",
+        "mesh_err",
         "fitted"
     );
     for t in &r.tests {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
         let _ = writeln!(
             s,
-            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>6}",
+            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}",
             t.kind,
             t.angle_deg,
             t.curve.as_deref().unwrap_or("-"),
@@ -111,6 +119,8 @@ pub fn table(r: &FitResult) -> String {
             opt(t.misalign_deg, &|m| format!("{m:+.2}")),
             opt(t.avg_rel_error_aligned, &|e| format!("{:.2} %", 100.0 * e)),
             opt(t.toe, &|m| format!("{:.3}", m * 1e3)),
+            t.mesh.map_or("-".into(), |(a, b)| format!("{a}x{b}")),
+            opt(t.mesh_error_est, &|e| format!("{:.2} %", 100.0 * e)),
             if t.used_in_fit { "yes" } else { "no" },
         );
     }
@@ -225,6 +235,116 @@ pub fn curve_svg(t: &TestOutcome, title: &str) -> Result<String, String> {
     Ok(buf)
 }
 
+/// Force at elongation `x` on a measured curve, linear between its points (`None` outside).
+fn measured_at(points: &[(f64, f64, f64)], x: f64) -> Option<f64> {
+    let i = points.partition_point(|p| p.0 < x);
+    if i == 0 {
+        return (points.first()?.0 == x).then(|| points[0].1);
+    }
+    let (a, b) = (points[i - 1], *points.get(i)?);
+    Some(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
+}
+
+/// SVG of every repeat at one angle: the repeats' scatter band (grey, between the smallest and
+/// largest measured force where every repeat has data), each repeat measured (dashed) and the
+/// fit (solid, one line per strip geometry).
+pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> {
+    use plotters::prelude::*;
+    let emax = tests
+        .iter()
+        .flat_map(|t| t.points.iter().map(|p| p.0 * 1e3))
+        .fold(0.0, f64::max);
+    let fmax = tests
+        .iter()
+        .flat_map(|t| t.points.iter().map(|p| p.1.max(p.2)))
+        .fold(0.0, f64::max)
+        .max(1e-12);
+    if emax <= 0.0 {
+        return Err("nothing to plot".into());
+    }
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, (640, 440)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..emax, 0.0..1.05 * fmax)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("elongation (mm)")
+            .y_desc("force (N)")
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        if tests.len() > 1 {
+            let n = 100;
+            let (mut lo, mut hi) = (Vec::new(), Vec::new());
+            for k in 0..=n {
+                let x = emax * 1e-3 * k as f64 / n as f64;
+                let at: Option<Vec<f64>> =
+                    tests.iter().map(|t| measured_at(&t.points, x)).collect();
+                if let Some(v) = at {
+                    let (a, b) = v
+                        .iter()
+                        .fold((f64::MAX, f64::MIN), |m, &f| (m.0.min(f), m.1.max(f)));
+                    lo.push((x * 1e3, a));
+                    hi.push((x * 1e3, b));
+                }
+            }
+            hi.reverse();
+            lo.extend(hi);
+            if lo.len() > 2 {
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        lo,
+                        RGBColor(210, 210, 210).filled(),
+                    )))
+                    .map_err(|e| e.to_string())?
+                    .label("repeat scatter")
+                    .legend(|(x, y)| {
+                        Rectangle::new(
+                            [(x, y - 4), (x + 20, y + 4)],
+                            RGBColor(210, 210, 210).filled(),
+                        )
+                    });
+            }
+        }
+        for (i, t) in tests.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            let measured: Vec<(f64, f64)> = t.points.iter().map(|p| (p.0 * 1e3, p.1)).collect();
+            let name = t.curve.clone().unwrap_or_default();
+            chart
+                .draw_series(DashedLineSeries::new(
+                    measured,
+                    5,
+                    4,
+                    colour.stroke_width(2),
+                ))
+                .map_err(|e| e.to_string())?
+                .label(format!("{name} measured"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+            let fitted: Vec<(f64, f64)> = t.points.iter().map(|p| (p.0 * 1e3, p.2)).collect();
+            chart
+                .draw_series(LineSeries::new(fitted, BLACK.stroke_width(1)))
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .border_style(BLACK)
+            .background_style(WHITE)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(buf)
+}
+
 /// Writes `DIR/<kind>-<curve>.csv` and `.svg` for every tensile and validation test, and
 /// `DIR/summary.txt` with the table. Returns the files written.
 pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec<String>> {
@@ -246,6 +366,28 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         );
         if let Ok(svg) = curve_svg(t, &title) {
             let path = dir.join(format!("{stem}.svg"));
+            std::fs::write(&path, svg)?;
+            written.push(path.display().to_string());
+        }
+    }
+    // one plot per angle with every repeat and their scatter band
+    let mut angles: Vec<f64> = r
+        .tests
+        .iter()
+        .filter(|t| !t.points.is_empty())
+        .map(|t| t.angle_deg)
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    angles.dedup();
+    for a in angles {
+        let at: Vec<&TestOutcome> = r
+            .tests
+            .iter()
+            .filter(|t| t.angle_deg == a && !t.points.is_empty())
+            .collect();
+        let title = format!("{a}°: {} repeat(s), fit solid", at.len());
+        if let Ok(svg) = angle_svg(&at, &title) {
+            let path = dir.join(format!("angle-{a}.svg"));
             std::fs::write(&path, svg)?;
             written.push(path.display().to_string());
         }

@@ -7,13 +7,16 @@ use super::{FitError, Fitter, RigKey, FIT_RTOL, NEAR_ANGLE_DEG};
 use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig, TensileStrip};
 
-/// A strip mesh at a ladder level: the level's 50 × 75 mm mesh scaled to the strip.
+/// A strip mesh at a ladder level: the level's 50 × 75 mm element size (h = 50 mm / NX) on the
+/// strip, but at least NX/4 faces across (a 2 mm strip gets 2, 4, 8 across on the default
+/// ladder instead of 2 at every level) and elements at most 4 times longer than wide; at most
+/// 2000 along.
 pub(super) fn strip_mesh(level: (usize, usize), width: f64, length: f64) -> (usize, usize) {
     let h = 0.05 / level.0 as f64;
-    (
-        ((width / h).round() as usize).max(2),
-        ((length / h).round() as usize).max(2),
-    )
+    let across = ((width / h).round() as usize).max(level.0 / 4).max(2);
+    let slender = (length * across as f64 / (4.0 * width)).ceil();
+    let along = ((length / h).round().max(slender) as usize).clamp(2, 2000);
+    (across, along)
 }
 
 /// Forces of a strip at its nodes and ∂F/∂k (law parameters, then thickness) when asked.

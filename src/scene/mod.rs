@@ -563,9 +563,11 @@ impl StripRig {
         x: &[Vec3],
         lin: Option<crate::solve::Linearization>,
     ) -> Result<(Vec<f64>, Vec<Vec<f64>>), SolveError> {
+        // an equilibrium that ended unstable (a wrinkling strip's saddle) gets the
+        // sensitivities of a regularised tangent; the point's report says it is not stable
         let lin = match lin {
             Some(l) => l,
-            None => crate::solve::Linearization::new(&self.model, &self.system, x)?,
+            None => crate::solve::Linearization::new_regularized(&self.model, &self.system, x)?.0,
         };
         let sens = self
             .model
