@@ -338,3 +338,108 @@ fn converge_prints_a_table_and_writes_csv_and_svg() {
     assert_eq!(rc, 2);
     assert!(err.contains("--mesh-ladder"), "{err}");
 }
+
+/// Tiny elongations of off-axis strips: Newton stalls at the round-off floor of the strains
+/// (8.6e-9 relative here) and must say so, not fail; and a curve of 200 rows can be made.
+#[test]
+fn tensile_at_tiny_elongations_ends_at_the_round_off_floor() {
+    // the case: the example cotton, default mesh
+    let m = "examples/materials/cotton.toml".to_string();
+    let (rc, out, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "15",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "0.02",
+        "--steps",
+        "1",
+        "-v",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    let force: f64 = out
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(force > 0.0, "{out}");
+    let (rc, out, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "15",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "2",
+        "--steps",
+        "200",
+        "--mesh",
+        "4x6",
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    assert_eq!(out.lines().count(), 201);
+}
+
+/// a12 may be negative (a negative Poisson coupling): the only bound is a12² < a11·a22.
+#[test]
+fn negative_a12_is_a_legal_material() {
+    let m = material_file("negative-a12.toml", "");
+    let text = std::fs::read_to_string(&m)
+        .unwrap()
+        .replace("a12_pa = 0", "a12_pa = -2e7");
+    std::fs::write(&m, text).unwrap();
+    let (rc, out, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "45",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "1",
+        "--steps",
+        "1",
+        "--mesh",
+        "4x6",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    let text = std::fs::read_to_string(&m)
+        .unwrap()
+        .replace("a12_pa = -2e7", "a12_pa = -8e7");
+    std::fs::write(&m, text).unwrap();
+    let (rc, _, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        &m,
+        "--angle",
+        "45",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "1",
+        "--steps",
+        "1",
+        "--mesh",
+        "4x6",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("need a12² < a11·a22"), "{err}");
+}

@@ -128,6 +128,11 @@ pub struct TestOutcome {
     pub misalign_deg: Option<f64>,
     /// mean |relative error| at the nominal angle + `misalign_deg`
     pub avg_rel_error_aligned: Option<f64>,
+    /// the repeat's own force scale s (measured ≈ s × model, least squares in relative
+    /// terms) and the mean |relative error| after it: how far this strip is from the fitted
+    /// fabric as a whole (width, yarn count) and how well the law follows its shape
+    pub repeat_scale: Option<f64>,
+    pub avg_rel_error_scaled: Option<f64>,
     /// toe removed, m (negative: preload)
     pub toe: Option<f64>,
     /// the strip's real mesh on the last level (faces across × along)

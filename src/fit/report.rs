@@ -61,6 +61,12 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         if let Some(e) = t.avg_rel_error_aligned {
             let _ = writeln!(s, "avg_rel_error_aligned = {e:.6}");
         }
+        if let Some(k) = t.repeat_scale {
+            let _ = writeln!(s, "repeat_scale = {k:.6}");
+        }
+        if let Some(e) = t.avg_rel_error_scaled {
+            let _ = writeln!(s, "avg_rel_error_scaled = {e:.6}");
+        }
         if let Some(toe) = t.toe {
             let _ = writeln!(s, "toe_mm = {:.4}", toe * 1e3);
         }
@@ -90,11 +96,13 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
 /// The per-test table printed at the end of a fit.
 pub fn table(r: &FitResult) -> String {
     let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}\n",
+        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}\n",
         "kind",
         "angle",
         "curve",
         "avg_rel_error",
+        "scale",
+        "scaled_error",
         "drape_angle_deg",
         "misalign_deg",
         "aligned_error",
@@ -107,11 +115,13 @@ pub fn table(r: &FitResult) -> String {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
         let _ = writeln!(
             s,
-            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}",
+            "{:<11} {:>7.1} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}",
             t.kind,
             t.angle_deg,
             t.curve.as_deref().unwrap_or("-"),
             opt(t.avg_rel_error, &|e| format!("{:.2} %", 100.0 * e)),
+            opt(t.repeat_scale, &|k| format!("{k:.3}")),
+            opt(t.avg_rel_error_scaled, &|e| format!("{:.2} %", 100.0 * e)),
             match (t.drape_angle_deg, t.target_drape_deg) {
                 (Some(a), Some(g)) => format!("{a:.2} ({g:.1})"),
                 _ => "-".into(),
@@ -396,4 +406,18 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
     std::fs::write(&summary, table(r))?;
     written.push(summary.display().to_string());
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick;
+
+    #[test]
+    fn tick_labels_have_no_float_noise() {
+        assert_eq!(tick(9.999_999_999_999_999e-5), "0.0001");
+        assert_eq!(tick(0.30000000000000004), "0.3");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(1500.0), "1500");
+        assert_eq!(tick(0.0), "0");
+    }
 }

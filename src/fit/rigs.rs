@@ -234,3 +234,24 @@ pub(super) fn curve_residuals(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::strip_mesh;
+
+    #[test]
+    fn narrow_strips_are_refined_across_with_the_ladder() {
+        // the standard strip keeps the ladder's meshes
+        assert_eq!(strip_mesh((8, 12), 0.05, 0.075), (8, 12));
+        assert_eq!(strip_mesh((16, 24), 0.05, 0.075), (16, 24));
+        // a 2 mm strip on a 75 mm gauge: 2, 4, 8 across, elements at most 4:1
+        for (level, across) in [((8, 12), 2), ((16, 24), 4), ((32, 48), 8)] {
+            let (nx, ny) = strip_mesh(level, 0.002, 0.075);
+            assert_eq!(nx, across);
+            assert!(
+                0.075 / ny as f64 <= 4.0 * 0.002 / nx as f64 + 1e-12,
+                "{nx}x{ny}"
+            );
+        }
+    }
+}

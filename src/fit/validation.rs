@@ -156,6 +156,16 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         let data = f.data;
         let t = &data.tensile[curve.test];
         let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
+        // q = model/measured; the scale s with measured ≈ s·model minimises Σ(s q − 1)²:
+        // s = Σq/Σq²
+        let q: Vec<f64> = curve
+            .points
+            .iter()
+            .zip(&model)
+            .map(|(m, p)| p / m.1)
+            .collect();
+        let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
+        let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
         let strip = &f.prep.strips[curve.strip];
         let mesh = super::rigs::strip_mesh(last, strip.width, strip.length);
         let mesh_error = coarse.as_ref().map(|nodes| {
@@ -205,6 +215,8 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             target_drape_deg: None,
             misalign_deg: misalign,
             avg_rel_error_aligned: aligned,
+            repeat_scale: Some(scale),
+            avg_rel_error_scaled: Some(scaled),
             toe: Some(curve.toe),
             mesh: Some(mesh),
             mesh_error_est: mesh_error,
@@ -255,6 +267,8 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             target_drape_deg: Some(b.drape_angle_deg),
             misalign_deg: None,
             avg_rel_error_aligned: None,
+            repeat_scale: None,
+            avg_rel_error_scaled: None,
             toe: None,
             mesh: None,
             mesh_error_est: None,

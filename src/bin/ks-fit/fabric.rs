@@ -1,0 +1,276 @@
+//! The fabric commands of `ks-fit`: `fit` (a dataset to a material), `check` (what a dataset
+//! holds and what `fit` will do with it) and `synth` (a dataset from a material).
+
+use kshell::material::load_material;
+use std::path::PathBuf;
+
+/// The fit's settings from its flags, checked.
+#[allow(clippy::too_many_arguments)]
+pub fn fit_options(
+    max_degree: usize,
+    fixed_degree: Option<usize>,
+    mesh_ladder: &str,
+    method: kshell::fit::optim::Method,
+    protocol: &str,
+    toe: kshell::fit::ToeMode,
+    repeats: kshell::fit::RepeatMode,
+    max_misalign: f64,
+    nodes: usize,
+) -> Result<kshell::fit::FitOptions, String> {
+    if max_degree == 0 || fixed_degree == Some(0) {
+        return Err("degrees start at 1 (--max-degree, --degree)".into());
+    }
+    if !(0.0..=15.0).contains(&max_misalign) {
+        return Err(format!(
+            "--max-misalign must be in [0, 15] degrees, got {max_misalign}"
+        ));
+    }
+    if !(4..=200).contains(&nodes) {
+        return Err(format!("--nodes must be in [4, 200], got {nodes}"));
+    }
+    let ladder =
+        kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
+    Ok(kshell::fit::FitOptions {
+        max_degree,
+        fixed_degree,
+        ladder,
+        method,
+        paper_protocol: protocol == "paper",
+        toe,
+        repeats,
+        max_misalign_deg: max_misalign,
+        nodes,
+        ..kshell::fit::FitOptions::default()
+    })
+}
+
+pub fn cmd_fit(
+    file: &std::path::Path,
+    output: Option<&std::path::Path>,
+    report: Option<&std::path::Path>,
+    opts: &kshell::fit::FitOptions,
+    quiet: bool,
+) -> Result<(), String> {
+    use kshell::fit::{fit, report as fit_report};
+    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    for w in &warnings {
+        eprintln!("ks-fit: {w}");
+    }
+    let mut progress = |line: &str| {
+        if !quiet {
+            eprintln!("ks-fit: fit: {line}");
+        }
+    };
+    let result = fit(&data, opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
+    let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "{}-fit.toml",
+            data.name
+                .replace(|c: char| !c.is_alphanumeric() && c != '-', "_")
+        ))
+    });
+    let text = fit_report::fit_toml(&result, &file.display().to_string());
+    std::fs::write(&out, text).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    if let Some(dir) = report {
+        let files = fit_report::write_report(&result, dir)
+            .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
+        if !quiet {
+            eprintln!(
+                "ks-fit: fit: report: {} files in {}",
+                files.len(),
+                dir.display()
+            );
+        }
+    }
+    for line in result.degree_log.iter().chain(&result.notes) {
+        println!("{line}");
+    }
+    for line in &result.identifiability {
+        println!("identifiability: {line}");
+    }
+    print!("{}", fit_report::table(&result));
+    let stages: Vec<String> = result
+        .stats
+        .stage_seconds
+        .iter()
+        .map(|(s, t)| format!("{s} {t:.1} s"))
+        .collect();
+    println!(
+        "fitted on {} in {:.1} s: {} objective evaluations, {} Newton iterations ({})",
+        result
+            .meshes
+            .iter()
+            .map(|m| format!("{}x{}", m.0, m.1))
+            .collect::<Vec<_>>()
+            .join(" → "),
+        result.stats.seconds,
+        result.stats.evaluations,
+        result.stats.newton_iterations,
+        stages.join(", ")
+    );
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+pub fn cmd_check(file: &std::path::Path) -> Result<(), String> {
+    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    println!("dataset: {}", file.display());
+    println!("name: {}", data.name);
+    match data.areal_density {
+        Some(rho) => println!("areal density: {} g/m²", rho * 1e3),
+        None => println!("areal density: not given"),
+    }
+    println!(
+        "thickness: {} mm (measured; the fit's initial guess)",
+        data.thickness * 1e3
+    );
+    println!(
+        "tests: {} tensile, {} bend",
+        data.tensile.len(),
+        data.bend.len()
+    );
+    println!(
+        "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",
+        "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"
+    );
+    let mut info = Vec::new();
+    // what `ks-fit fit` will do with each curve by default (no solves: roles, toes, repeats)
+    use kshell::fit::preprocess::{prepare, RepeatMode, ToeMode};
+    let prep = prepare(&data, false, RepeatMode::All, ToeMode::Auto, 12);
+    for (i, t) in data.tensile.iter().enumerate() {
+        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
+        let role = match t.role(false) {
+            kshell::dataset::Role::Fit => "fitted",
+            kshell::dataset::Role::Validation => "validation",
+        };
+        if t.role.is_none() && !t.is_fitted() {
+            info.push(format!(
+                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
+                t.angle_deg,
+                t.curve.display()
+            ));
+        }
+        let toe = match &prep {
+            Ok(p) => p
+                .curves
+                .iter()
+                .find(|c| c.test == i)
+                .filter(|c| c.toe != 0.0)
+                .map(|c| {
+                    format!(
+                        ", toe {:.3} mm {}",
+                        c.toe * 1e3,
+                        if c.toe_auto { "detected" } else { "given" }
+                    )
+                })
+                .unwrap_or_default(),
+            Err(_) => String::new(),
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14.4} {:>12.4}  {role} ({}{toe})",
+            "tensile",
+            t.angle_deg,
+            t.width * 1e3,
+            t.gauge_length * 1e3,
+            t.elongation.len(),
+            max_elong * 1e3,
+            max_force,
+            t.curve.display()
+        );
+    }
+    for b in &data.bend {
+        let role = if data.known.thickness.is_some() {
+            "predicted: thickness known"
+        } else {
+            "fitted"
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
+            "bend",
+            b.angle_deg,
+            b.width * 1e3,
+            b.overhang * 1e3,
+            "-",
+            "-",
+            "-",
+            b.drape_angle_deg
+        );
+    }
+    let k = &data.known;
+    for (name, v) in [
+        ("a11_pa", k.a11),
+        ("a22_pa", k.a22),
+        ("a12_pa", k.a12),
+        ("g12_pa", k.g12),
+        ("thickness_mm", k.thickness.map(|t| t * 1e3)),
+        ("poisson_12", k.poisson_12),
+    ] {
+        if let Some(v) = v {
+            info.push(format!("known: {name} = {v} (held by the fit)"));
+        }
+    }
+    let fitted_at = |a: f64| {
+        data.tensile
+            .iter()
+            .any(|t| (t.angle_deg - a).abs() < 1e-9 && t.role(false) == kshell::dataset::Role::Fit)
+    };
+    let refusal = match &prep {
+        Err(e) => Some(e.to_string()),
+        Ok(_) if !fitted_at(90.0) && !fitted_at(0.0) && k.a11.is_none() && k.a22.is_none() => Some(
+            "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa".into(),
+        ),
+        Ok(_) => None,
+    };
+    for l in &info {
+        println!("{l}");
+    }
+    for w in &warnings {
+        println!("{w}");
+    }
+    println!(
+        "valid{}{}",
+        match warnings.len() {
+            0 => String::new(),
+            1 => " (1 warning)".into(),
+            n => format!(" ({n} warnings)"),
+        },
+        refusal
+            .map(|why| format!("; ks-fit fit would refuse it: {why}"))
+            .unwrap_or_default()
+    );
+    Ok(())
+}
+
+pub fn cmd_synth(
+    material: &std::path::Path,
+    out: &std::path::Path,
+    opts: &kshell::synth::SynthOptions,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
+    let data = kshell::synth::synthesize(&mat, opts, &mut progress).map_err(|e| e.to_string())?;
+    let comment = format!(
+        "SYNTHETIC dataset written by ks-fit synth from the material {}\n\
+         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{}\n\
+         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees",
+        material.display(),
+        opts.max_strain,
+        opts.points,
+        opts.repeats,
+        opts.noise,
+        opts.misalign_deg,
+        opts.seed,
+        opts.mesh.0,
+        opts.mesh.1
+    );
+    kshell::dataset::write_dataset_with_comment(out, &data, &comment)
+        .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;
+    println!(
+        "wrote {} ({} tensile curves, {} bend tests)",
+        out.join("fabric.toml").display(),
+        data.tensile.len(),
+        data.bend.len()
+    );
+    Ok(())
+}
