@@ -3,32 +3,9 @@
 //! issue's acceptance numbers), the output loads as a material and carries its `[fit]` table,
 //! and datasets the fit cannot use are refused with exit code 2.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn ks_fit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run ks-fit");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn folder(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kshell-fit-{}-{tag}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
+use common::{folder, ks_fit, s};
 
 /// A degree-2 material (warp and weft stiffen, shear stiffens strongly), no cut-offs.
 const DEGREE2: &str = "name = \"degree-2\"
@@ -50,7 +27,7 @@ alpha = [1.0, 300.0]
 
 #[test]
 fn noise_free_degree2_data_are_fitted_back() {
-    let dir = folder("degree2");
+    let dir = folder("fit-degree2");
     let material = dir.join("degree2.toml");
     std::fs::write(&material, DEGREE2).unwrap();
     let data = dir.join("data");
@@ -152,7 +129,7 @@ fn noise_free_degree2_data_are_fitted_back() {
 
 #[test]
 fn datasets_without_warp_or_weft_are_refused() {
-    let dir = folder("bias-only");
+    let dir = folder("fit-bias-only");
     std::fs::write(
         dir.join("fabric.toml"),
         "name = \"x\"\nthickness_mm = 0.2\n[[tensile]]\nangle_deg = 45\nwidth_mm = 50\n\

@@ -4,32 +4,10 @@
 //! the virtual lab (a known material) and are then spoiled the way real exports are; the fit
 //! must give back the material's stiffness as if they were clean.
 
+mod common;
+
+use common::{folder, ks_fit, s};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn ks_fit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run ks-fit");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn folder(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kshell-fitlab-{}-{tag}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 /// Warp and weft stiffen, shear linear; a12 the paper's default.
 const MATERIAL: &str = "name = \"lab\"
@@ -203,7 +181,7 @@ fn slack_preload_kn_parallel_strips_and_duplicates_are_undone() {
 
 #[test]
 fn forces_that_look_like_kn_are_refused_until_scaled() {
-    let dir = folder("kn");
+    let dir = folder("fitlab-kn");
     std::fs::write(
         dir.join("warp.csv"),
         "elongation_mm,force_n\n0.75,0.0205\n1.5,0.041\n3,0.08\n",

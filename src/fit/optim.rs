@@ -69,9 +69,6 @@ pub struct OptimOptions {
     pub target: f64,
     /// longest step tried, in the ∞-norm of the variables (a trust bound on wild trials)
     pub max_step: f64,
-    /// the part of ε no variable can lower (the repeats' scale scatter): `rel_decrease` is
-    /// measured against ε − floor
-    pub floor: f64,
 }
 
 impl Default for OptimOptions {
@@ -83,7 +80,6 @@ impl Default for OptimOptions {
             gtol: 1e-12,
             target: 0.0,
             max_step: f64::INFINITY,
-            floor: 0.0,
         }
     }
 }
@@ -172,7 +168,7 @@ fn bfgs(
         let y = &ga - &g;
         let sy = s.dot(&y);
         x += &s;
-        let decrease = (f - fa) / (f - opts.floor).max(1e-300);
+        let decrease = (f - fa) / f.max(1e-300);
         f = fa;
         g = ga;
         if sy > 1e-12 * s.norm() * y.norm() {
@@ -265,7 +261,7 @@ fn hybrid(
         let s = alpha * &d;
         let y = &ga - &g;
         x += &s;
-        let decrease = (f - fa) / (f - opts.floor).max(1e-300);
+        let decrease = (f - fa) / f.max(1e-300);
         f = fa;
         g = ga;
         let sy = s.dot(&y);
@@ -481,7 +477,7 @@ fn gauss_newton(
             report.stop = "line search failed (Gauss–Newton stalled)".into();
             break;
         };
-        let decrease = (f - fa) / (f - opts.floor).max(1e-300);
+        let decrease = (f - fa) / f.max(1e-300);
         x = xa;
         cur = e;
         f = fa;
@@ -519,7 +515,6 @@ mod tests {
                 gtol: 1e-10,
                 target: 1e-20,
                 max_step: f64::INFINITY,
-                floor: 0.0,
             };
             let r = minimize(&mut p, &opts, rosenbrock).unwrap();
             assert!(

@@ -12,24 +12,6 @@ use crate::scene::{BendRig, CantileverBend, SceneError};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// The part of Σ r² that each curve's own best force scale would remove (r = w (q − 1), w =
-/// 1/√n, q = model/measured): Σ over curves of w² [Σ(q − 1)² − min_s Σ(s q − 1)²].
-fn scatter_part(lens: &[usize], r: &[f64]) -> f64 {
-    let mut k = 0;
-    let mut out = 0.0;
-    for &n in lens {
-        let w2 = 1.0 / n as f64;
-        let q: Vec<f64> = r[k..k + n].iter().map(|v| 1.0 + v / w2.sqrt()).collect();
-        k += n;
-        let (sq, sqq) = (q.iter().sum::<f64>(), q.iter().map(|v| v * v).sum::<f64>());
-        let s = sq / sqq.max(1e-300);
-        let before: f64 = q.iter().map(|v| (v - 1.0).powi(2)).sum();
-        let after: f64 = q.iter().map(|v| (s * v - 1.0).powi(2)).sum();
-        out += w2 * (before - after).max(0.0);
-    }
-    out
-}
-
 /// Weight of the new term when the shell raises a degree.
 const NEW_TERM_MU: f64 = 0.01;
 
@@ -61,7 +43,6 @@ impl Fitter<'_> {
             gtol: 0.0,
             target: 0.0,
             max_step: 2.0,
-            floor: 0.0,
         };
         let residuals = |q: &[f64], jac: bool| -> Result<(Vec<f64>, Vec<Vec<f64>>), ()> {
             let mut law = base.clone();
@@ -232,14 +213,13 @@ impl Fitter<'_> {
                 self.opts.rel_decrease.max(0.05),
             )
         };
-        let mut opts = OptimOptions {
+        let opts = OptimOptions {
             method: self.opts.method,
             max_iterations,
             rel_decrease,
             gtol: 1e-12,
             target: ncurves as f64 * self.opts.fit_tol.powi(2),
             max_step: 0.5,
-            floor: 0.0,
         };
         let lens: Vec<usize> = curves
             .iter()
@@ -320,12 +300,6 @@ impl Fitter<'_> {
             })
             .map_err(fail)?;
             p[0] = scale[0];
-        }
-        if first_level && ncurves > 1 {
-            // the repeats' scale scatter is most of ε when every repeat is fitted: measure
-            // the stage's progress against the rest (90 % of the scatter, to stay safe)
-            let e = problem(&p, false).map_err(fail)?;
-            opts.floor = 0.9 * scatter_part(&lens, &e.residuals);
         }
         let rep = minimize(&mut p, &opts, &mut problem).map_err(fail)?;
         self.stats.evaluations += evals;
@@ -518,7 +492,6 @@ impl Fitter<'_> {
             gtol: 1e-14,
             target: bends.len() as f64 * self.opts.fit_tol.powi(2),
             max_step: 0.5,
-            floor: 0.0,
         };
         let (mut evals, mut newton) = (0, 0);
         let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {

@@ -414,13 +414,7 @@ impl Linearization {
     /// Assembles and factorises at `x` (an equilibrium of `system`). Fails if K is not
     /// positive definite: a saddle has no unique sensitivity.
     pub fn new(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<Self, SolveError> {
-        let mut grad = vec![[0.0; 3]; model.num_nodes()];
-        let mut hessian = BlockMatrix::zeros(model.pattern.clone());
-        model
-            .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hessian))
-            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-        let mut values = Vec::new();
-        system.values(&hessian, &mut values);
+        let (hessian, values) = Self::assemble(model, system, x)?;
         let llt = system.try_factor(&values)?.ok_or_else(|| {
             SolveError::Linear("the equilibrium's Hessian is not positive definite".into())
         })?;
@@ -429,6 +423,22 @@ impl Linearization {
             values,
             llt,
         })
+    }
+
+    /// The full Hessian at `x` and the reduced K's values.
+    fn assemble(
+        model: &ShellModel,
+        system: &FreeSystem,
+        x: &[Vec3],
+    ) -> Result<(BlockMatrix, Vec<f64>), SolveError> {
+        let mut grad = vec![[0.0; 3]; model.num_nodes()];
+        let mut hessian = BlockMatrix::zeros(model.pattern.clone());
+        model
+            .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hessian))
+            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+        let mut values = Vec::new();
+        system.values(&hessian, &mut values);
+        Ok((hessian, values))
     }
 
     /// As [`Linearization::new`], but where K is not positive definite (an equilibrium that
@@ -441,13 +451,7 @@ impl Linearization {
         system: &FreeSystem,
         x: &[Vec3],
     ) -> Result<(Self, f64), SolveError> {
-        let mut grad = vec![[0.0; 3]; model.num_nodes()];
-        let mut hessian = BlockMatrix::zeros(model.pattern.clone());
-        model
-            .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hessian))
-            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-        let mut values = Vec::new();
-        system.values(&hessian, &mut values);
+        let (hessian, values) = Self::assemble(model, system, x)?;
         for sigma in [0.0, 1e-10, 1e-8, 1e-6, 1e-4] {
             let mut shifted = values.clone();
             for &k in &system.diag {
