@@ -2,7 +2,9 @@
 //! multiresolution ladder. The stages live in their own modules:
 //! - [`preprocess`]: toe compensation, roles and repeats, the strips the model solves;
 //! - [`map`]: a stage's variables and the law (and the a12 rule);
-//! - `stages`: the homogeneous bootstrap and degree choice, the shell stages, the thickness;
+//! - `rigs`: the strips kept warm, their node forces and the interpolation to the points;
+//! - `stages`: the homogeneous bootstrap and degree choice, the shell stages, the ladder;
+//! - `thickness`: the thickness from the bends;
 //! - `validation`: predictions at the nominal angle, the misalignment diagnostic, the notes on
 //!   what the data determine;
 //! - [`report`]: files and tables.
@@ -30,6 +32,7 @@ pub mod preprocess;
 pub mod report;
 mod rigs;
 mod stages;
+mod thickness;
 mod validation;
 
 use crate::dataset::{FabricDataset, Role};

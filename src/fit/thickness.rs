@@ -1,0 +1,136 @@
+//! The thickness stage (paper §5, stage 7): the bend tests' drape angles fit the thickness τ,
+//! with a_ij and G12 scaled by τ⁰/τ so that the membrane stiffnesses a·τ, and so the tensile
+//! fits, are kept (the bending rigidity goes as a·τ³/12).
+
+use super::optim::{minimize, Evaluation, OptimOptions};
+use super::{to_evaluation, FitError, Fitter};
+use crate::dataset::BendTest;
+use crate::scene::{BendRig, CantileverBend, SceneError};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// A cantilever mesh at a ladder level (4 × (overhang / 6.25 mm) at 8 × 12, doubled per level).
+pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize) {
+    let f = level.0 as f64 / 8.0;
+    let nx = ((4.0 * f).round() as usize).max(2);
+    let ny = ((bend.overhang / (bend.width / 4.0) * f).round() as usize).max(4);
+    (nx, ny)
+}
+
+impl Fitter<'_> {
+    /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
+    pub(super) fn thickness_stage(
+        &mut self,
+        bends: &[BendTest],
+        level: (usize, usize),
+    ) -> Result<(), FitError> {
+        let t0 = Instant::now();
+        let mut rigs = Vec::new();
+        for b in bends {
+            let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+            bend.mesh = bend_mesh(level, b);
+            bend.solver.rtol = super::FIT_RTOL;
+            let rig = BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
+                stage: format!("setting up the {}° cantilever", b.angle_deg),
+                source,
+            })?;
+            rigs.push(rig);
+        }
+        let (law0, tau0) = (self.law.clone(), self.thickness);
+        let scaled = |q: &[f64]| {
+            let tau = tau0 * q[0].exp();
+            let s = tau0 / tau;
+            let mut law = law0.clone();
+            law.a11 *= s;
+            law.a22 *= s;
+            law.a12 *= s;
+            law.g12 *= s;
+            (law, tau)
+        };
+        let mut p = vec![0.0];
+        // as for the tensile stages, finer levels only polish the last level's thickness
+        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
+            (self.opts.max_iterations, self.opts.rel_decrease)
+        } else {
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
+        };
+        let opts = OptimOptions {
+            method: self.opts.method,
+            max_iterations,
+            rel_decrease,
+            gtol: 1e-14,
+            target: bends.len() as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
+        };
+        let (mut evals, mut newton) = (0, 0);
+        let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+            let (law, tau) = scaled(q);
+            let (mut r, mut j) = (Vec::new(), Vec::new());
+            // the cantilevers are independent: solved side by side, gathered in order
+            let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = rigs
+                .par_iter_mut()
+                .map(|rig| {
+                    rig.set_material(&law, tau)?;
+                    rig.run(jac)
+                })
+                .collect();
+            for (pt, b) in runs.into_iter().zip(bends) {
+                let pt = pt?;
+                evals += 1;
+                newton += pt.report.iterations;
+                r.push((pt.drape_angle_deg - b.drape_angle_deg) / b.drape_angle_deg);
+                if jac {
+                    // d/d ln τ = τ ∂/∂τ − Σ a ∂/∂a over a11, a22, a12, g12
+                    let d = &pt.dangle;
+                    let dtau = tau * d[d.len() - 1]
+                        - law.a11 * d[0]
+                        - law.a22 * d[1]
+                        - law.a12 * d[2]
+                        - law.g12 * d[3];
+                    j.push(vec![dtau / b.drape_angle_deg]);
+                }
+            }
+            Ok(to_evaluation(r, j, 1, jac))
+        };
+        let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
+            stage: format!("thickness stage on {}×{}", level.0, level.1),
+            source,
+        })?;
+        self.stats.evaluations += evals;
+        self.stats.newton_iterations += newton;
+        let (law, tau) = scaled(&p);
+        // the drape angles at the accepted thickness (warm: a Newton step or two)
+        self.bend_angles.clear();
+        for rig in &mut rigs {
+            rig.set_material(&law, tau)
+                .and_then(|_| rig.run(false))
+                .map(|pt| self.bend_angles.push(pt.drape_angle_deg))
+                .map_err(|source| FitError::Scene {
+                    stage: "drape angles at the fitted thickness".into(),
+                    source,
+                })?;
+            self.stats.evaluations += 1;
+        }
+        self.law = law;
+        // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
+        if let super::map::A12Rule::Fixed(_) = self.a12 {
+            self.a12.apply(&mut self.law);
+        }
+        self.thickness = tau;
+        let msg = format!(
+            "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
+            level.0,
+            level.1,
+            tau * 1e3,
+            100.0 * (rep.objective / bends.len() as f64).sqrt(),
+            rep.evaluations,
+            rep.stop
+        );
+        self.say(&msg);
+        self.time_stage("thickness", t0);
+        Ok(())
+    }
+}
