@@ -283,6 +283,28 @@ impl Fitter<'_> {
         }
     }
 
+    /// A stage's minimiser settings on a mesh level, `n` residual groups (curves or bends):
+    /// the first level fits; finer levels start from the last level's fit and only polish it
+    /// (at most 5 iterations, stopping when one gains under 5 %).
+    fn stage_options(&self, level: (usize, usize), gtol: f64, n: usize) -> optim::OptimOptions {
+        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
+            (self.opts.max_iterations, self.opts.rel_decrease)
+        } else {
+            (
+                self.opts.max_iterations.min(5),
+                self.opts.rel_decrease.max(0.05),
+            )
+        };
+        optim::OptimOptions {
+            method: self.opts.method,
+            max_iterations,
+            rel_decrease,
+            gtol,
+            target: n as f64 * self.opts.fit_tol.powi(2),
+            max_step: 0.5,
+        }
+    }
+
     /// The fitted strips of a stage: warp (90°), weft (0°) or shear (every other angle).
     fn stage_strips(&self, dir: Direction) -> Vec<usize> {
         let is = |a: f64, b: f64| (a - b).abs() < 1e-9;

@@ -193,23 +193,7 @@ impl Fitter<'_> {
         let mut p = map.encode(&self.law);
         let base = self.law.clone();
         let first_level = level == self.opts.ladder[0];
-        // finer levels start from the last level's fit and only polish it
-        let (max_iterations, rel_decrease) = if first_level {
-            (self.opts.max_iterations, self.opts.rel_decrease)
-        } else {
-            (
-                self.opts.max_iterations.min(5),
-                self.opts.rel_decrease.max(0.05),
-            )
-        };
-        let opts = OptimOptions {
-            method: self.opts.method,
-            max_iterations,
-            rel_decrease,
-            gtol: 1e-12,
-            target: ncurves as f64 * self.opts.fit_tol.powi(2),
-            max_step: 0.5,
-        };
+        let opts = self.stage_options(level, 1e-12, ncurves);
         let lens: Vec<usize> = curves
             .iter()
             .flatten()

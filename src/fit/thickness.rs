@@ -2,7 +2,7 @@
 //! with a_ij and G12 scaled by τ⁰/τ so that the membrane stiffnesses a·τ, and so the tensile
 //! fits, are kept (the bending rigidity goes as a·τ³/12).
 
-use super::optim::{minimize, Evaluation, OptimOptions};
+use super::optim::{minimize, Evaluation};
 use super::{to_evaluation, FitError, Fitter};
 use crate::dataset::BendTest;
 use crate::scene::{BendRig, CantileverBend, SceneError};
@@ -48,23 +48,7 @@ impl Fitter<'_> {
             (law, tau)
         };
         let mut p = vec![0.0];
-        // as for the tensile stages, finer levels only polish the last level's thickness
-        let (max_iterations, rel_decrease) = if level == self.opts.ladder[0] {
-            (self.opts.max_iterations, self.opts.rel_decrease)
-        } else {
-            (
-                self.opts.max_iterations.min(5),
-                self.opts.rel_decrease.max(0.05),
-            )
-        };
-        let opts = OptimOptions {
-            method: self.opts.method,
-            max_iterations,
-            rel_decrease,
-            gtol: 1e-14,
-            target: bends.len() as f64 * self.opts.fit_tol.powi(2),
-            max_step: 0.5,
-        };
+        let opts = self.stage_options(level, 1e-14, bends.len());
         let (mut evals, mut newton) = (0, 0);
         let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
             let (law, tau) = scaled(q);
