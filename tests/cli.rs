@@ -1,20 +1,9 @@
 //! End-to-end tests of the `ks-fit` command line: outputs users and scripts rely on, and errors
 //! that name the file and line and exit with code 2.
 
-use std::process::Command;
+mod common;
 
-fn ks_fit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run ks-fit");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::ks_fit;
 
 fn temp_file(name: &str, text: &str) -> String {
     let dir = std::env::temp_dir().join(format!("kshell-cli-{}", std::process::id()));

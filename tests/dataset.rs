@@ -2,21 +2,10 @@
 //! dataset is summarised, broken ones exit with code 2 naming the file and line, and a
 //! synthetic dataset checks, rises, and reproduces its drape angles.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn ks_fit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run ks-fit");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use common::ks_fit;
+use std::path::{Path, PathBuf};
 
 /// A fresh folder for one test.
 fn folder(tag: &str) -> PathBuf {

@@ -1,4 +1,6 @@
-//! Helpers shared by the end-to-end tests that drive the `ks-fit` binary.
+//! Helpers shared by the end-to-end tests that drive the `ks-fit` binary (each test crate
+//! uses some of them).
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
