@@ -34,10 +34,16 @@ pub struct Study {
 /// The default ladder: (nx, ny) = (4, round(4 · aspect)) · 2^k for k = 0..levels, `aspect`
 /// being length / width (4 × 6, 8 × 12, … for a 50 × 75 mm strip). Every rung is exactly twice
 /// as fine as the last, as Richardson extrapolation assumes.
+/// `levels` is at most [`MAX_LEVELS`] (the sizes would overflow far beyond it).
 pub fn default_ladder(aspect: f64, levels: usize) -> Vec<(usize, usize)> {
     let ny0 = ((4.0 * aspect).round() as usize).max(1);
-    (0..levels).map(|k| (4usize << k, ny0 << k)).collect()
+    (0..levels.min(MAX_LEVELS))
+        .map(|k| (4usize << k, ny0.saturating_mul(1 << k)))
+        .collect()
 }
+
+/// Most levels of a default ladder: 4 × 6 doubled ten times is 2048 × 3072, 6 million faces.
+pub const MAX_LEVELS: usize = 10;
 
 /// Parses "4x6,8x12,16x24".
 pub fn parse_ladder(s: &str) -> Result<Vec<(usize, usize)>, String> {
@@ -56,6 +62,35 @@ pub fn parse_ladder(s: &str) -> Result<Vec<(usize, usize)>, String> {
             Ok((nx, ny))
         })
         .collect()
+}
+
+/// Checks a ladder before any level runs: each mesh within the face limit
+/// ([`crate::limits`]) and finer than the one before; with `doubling`, exactly twice as fine in
+/// both directions, as the Richardson estimate and the observed order assume.
+pub fn check_ladder(ladder: &[(usize, usize)], doubling: bool) -> Result<(), String> {
+    for (k, &(nx, ny)) in ladder.iter().enumerate() {
+        crate::limits::check_mesh(&format!("mesh {nx}x{ny}"), nx, ny)?;
+        if k == 0 {
+            continue;
+        }
+        let (px, py) = ladder[k - 1];
+        let finer = if doubling {
+            nx == 2 * px && ny == 2 * py
+        } else {
+            nx >= px && ny >= py && nx.saturating_mul(ny) > px * py
+        };
+        if !finer {
+            return Err(format!(
+                "mesh {nx}x{ny} after {px}x{py}: each mesh must be {} the one before",
+                if doubling {
+                    "twice as fine in both directions as"
+                } else {
+                    "finer than"
+                }
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Runs `scene(mesh) -> (qoi, dofs)` on each mesh (calling `progress` after each) and analyses

@@ -10,6 +10,8 @@
 //! | [`quadrature`] | Gauss–Legendre rules on faces and through the thickness |
 //! | [`dataset`] | the fabric dataset: `fabric.toml` and its CSV curves, read, checked, written |
 //! | [`synth`] | synthetic datasets from a material through the virtual lab |
+//! | [`io`] | safe output (temporary file and rename) and plain number printing |
+//! | [`limits`] | resource limits checked before allocating (faces of a mesh) |
 //!
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
 //! plain structs of arrays; see `DESIGN.md` in the repository for the map.
@@ -19,6 +21,8 @@ pub mod atlas;
 pub mod converge;
 pub mod dataset;
 pub mod fit;
+pub mod io;
+pub mod limits;
 pub mod material;
 pub mod mesh;
 pub mod quadrature;

@@ -104,12 +104,19 @@ impl Rng {
     }
 }
 
+/// Most points per curve (a machine export rarely has more than a few thousand).
+pub const MAX_POINTS: usize = 100_000;
+/// Most repeats per angle.
+pub const MAX_REPEATS: usize = 100;
+/// Largest standard deviation of the cut angle, degrees (a lab cuts within a few degrees).
+pub const MAX_MISALIGN_DEG: f64 = 15.0;
+
 impl SynthOptions {
     fn check(&self) -> Result<(), SynthError> {
         let bad = |m: String| Err(SynthError::Options(m));
         if !(self.max_strain.is_finite() && self.max_strain > 0.0 && self.max_strain <= 1.0) {
             return bad(format!(
-                "max strain must be in (0, 1], got {}",
+                "max strain must be in (0, 1], got {:?}",
                 self.max_strain
             ));
         }
@@ -119,15 +126,22 @@ impl SynthOptions {
         if self.repeats == 0 {
             return bad("repeats must be at least 1".into());
         }
+        if self.points > MAX_POINTS || self.repeats > MAX_REPEATS {
+            return bad(format!(
+                "at most {MAX_POINTS} points and {MAX_REPEATS} repeats, got {} and {}",
+                self.points, self.repeats
+            ));
+        }
         if !(self.noise.is_finite() && (0.0..1.0).contains(&self.noise)) {
             return bad(format!(
-                "noise must be a relative size in [0, 1), got {}",
+                "noise must be a relative size in [0, 1), got {:?}",
                 self.noise
             ));
         }
-        if !(self.misalign_deg.is_finite() && self.misalign_deg >= 0.0) {
+        if !(self.misalign_deg.is_finite() && (0.0..=MAX_MISALIGN_DEG).contains(&self.misalign_deg))
+        {
             return bad(format!(
-                "misalignment must be a finite non-negative number of degrees, got {}",
+                "misalignment must be a standard deviation in [0, {MAX_MISALIGN_DEG}] degrees, got {:?}",
                 self.misalign_deg
             ));
         }
@@ -137,6 +151,12 @@ impl SynthOptions {
                 self.mesh.0, self.mesh.1
             ));
         }
+        crate::limits::check_mesh(
+            &format!("the strip mesh {}x{}", self.mesh.0, self.mesh.1),
+            self.mesh.0,
+            self.mesh.1,
+        )
+        .map_err(SynthError::Options)?;
         Ok(())
     }
 }

@@ -31,9 +31,9 @@ range() {
 if [ -z "${SUMMARY_ONLY:-}" ]; then
   for f in ${ONLY:-canvas cotton silk denim wool}; do
     $bin fit paper_repro/fabrics/$f/fabric.toml -o $out/$f-fit.toml --report $out/$f \
-      > $out/$f.txt 2> $out/$f.log
+      > $out/$f.txt 2> $out/$f.log || [ $? -eq 3 ]  # 3: ran, but missed --max-error (verdict)
     $bin fit paper_repro/fabrics/$f/fabric.toml -o $out/$f-paper-fit.toml --protocol paper \
-      --repeat largest > $out/$f-paper.txt 2> $out/$f-paper.log
+      --repeat largest > $out/$f-paper.txt 2> $out/$f-paper.log || [ $? -eq 3 ]
   done
 fi
 {
@@ -97,6 +97,16 @@ for f in canvas cotton silk denim wool; do
 done
 cat $out/paper.tmp $out/stages.tmp >> $out/summary.md
 rm -f $out/stages.tmp $out/paper.tmp
+{
+  echo
+  echo "## Verdicts (ks-fit fit's last table line; exit code 3 when FIT FAILED)"
+  echo
+  for f in ${ONLY:-canvas cotton silk denim wool}; do
+    for run in "$f" "$f-paper"; do
+      [ -f $out/$run.txt ] && echo "- $run: $(grep -h '^verdict:' $out/$run.txt | sed 's/^verdict: //')"
+    done
+  done
+} >> $out/summary.md
 
 if [ -z "${SUMMARY_ONLY:-}" ] || [ -n "${METHODS:-}" ]; then
 {

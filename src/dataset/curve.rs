@@ -340,10 +340,52 @@ pub(super) fn parse_curve(
             ),
         ));
     }
+    if let Some((i, why)) = corrupt_point(&c.force_n) {
+        return Err(err(
+            c.lines[i],
+            format!(
+                "column {} (force_n) = {:?} N {why}: a corrupt value? remove or fix the row",
+                f.index + 1,
+                c.force_n[i]
+            ),
+        ));
+    }
     if header_text.replace(' ', "") != CURVE_HEADER {
         c.units = Some(units);
     }
     Ok(c)
+}
+
+/// Largest force a strip test can report, N (100 tonnes: no fabric strip comes near it).
+pub const MAX_FORCE_N: f64 = 1e6;
+
+/// A force no strip test can give: above [`MAX_FORCE_N`], or an isolated spike more than ten
+/// times every other force of a curve of at least five points (one corrupt value would
+/// otherwise be the whole objective: its squared relative error swamps the rest).
+fn corrupt_point(force: &[f64]) -> Option<(usize, String)> {
+    if let Some(i) = force.iter().position(|x| x.abs() > MAX_FORCE_N) {
+        return Some((i, format!("is beyond {MAX_FORCE_N:e} N")));
+    }
+    if force.len() < 5 {
+        return None;
+    }
+    let (imax, fmax) = force
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
+    let others = force
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| i != imax)
+        .map(|(_, &x)| x)
+        .fold(0.0, f64::max);
+    (others > 0.0 && fmax > 10.0 * others).then(|| {
+        (
+            imax,
+            format!("is more than ten times every other force ({others:?} N at most)"),
+        )
+    })
 }
 
 /// A number, with a decimal comma when fields are separated by semicolons.

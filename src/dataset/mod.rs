@@ -308,7 +308,7 @@ impl Toml<'_> {
         } else {
             Err(self.err(
                 v.span(),
-                format!("{what}{key} must be a finite positive number, got {x}"),
+                format!("{what}{key} must be a finite positive number, got {x:?}"),
             ))
         }
     }
@@ -321,7 +321,7 @@ impl Toml<'_> {
         } else {
             Err(self.err(
                 v.span(),
-                format!("{what}angle_deg must be in [0, 180) (from the weft), got {a}"),
+                format!("{what}angle_deg must be in [0, 180) (from the weft), got {a:?}"),
             ))
         }
     }
@@ -384,20 +384,11 @@ const MAX_CURVE_BYTES: u64 = 256 << 20;
 
 /// A curve file's text: regular files only (not a FIFO or a device), of bounded size.
 fn read_curve_file(path: &Path) -> Result<String, String> {
-    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
-    if !meta.is_file() {
-        return Err("not a regular file".into());
-    }
-    if meta.len() > MAX_CURVE_BYTES {
-        return Err(format!(
-            "{} bytes, more than the {} MiB a curve may have",
-            meta.len(),
-            MAX_CURVE_BYTES >> 20
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_string())
+    crate::io::read_text(path, MAX_CURVE_BYTES)
 }
+
+/// Largest `fabric.toml` read.
+const MAX_TOML_BYTES: u64 = 16 << 20;
 
 /// The `[known]` table in SI units.
 fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
@@ -414,7 +405,7 @@ fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
         Some(v) if !v.get_ref().is_finite() => {
             return Err(t.err(
                 v.span(),
-                format!("[known] a12_pa must be finite, got {}", v.get_ref()),
+                format!("[known] a12_pa must be finite, got {:?}", v.get_ref()),
             ))
         }
         v => v.as_ref().map(|v| *v.get_ref()),
@@ -423,7 +414,10 @@ fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
         Some(v) if !(v.get_ref().is_finite() && v.get_ref().abs() < 1.0) => {
             return Err(t.err(
                 v.span(),
-                format!("[known] poisson_12 must be in (-1, 1), got {}", v.get_ref()),
+                format!(
+                    "[known] poisson_12 must be in (-1, 1), got {:?}",
+                    v.get_ref()
+                ),
             ))
         }
         v => v.as_ref().map(|v| *v.get_ref()),
@@ -457,10 +451,35 @@ fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
     Ok(known)
 }
 
-/// Reads and checks a dataset: `fabric.toml` and the curves it names (relative to its folder).
+/// Reads and checks a dataset: `fabric.toml` and the curves it names (relative to its folder,
+/// which they may not leave: see [`load_dataset_with`]).
 pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>), DatasetError> {
+    load_dataset_with(path, false)
+}
+
+/// Whether the curve path `curve` (as written, relative to `dir`), resolved with every symbolic
+/// link, lies inside the folder `dir`.
+fn inside(dir: &Path, curve: &Path) -> bool {
+    match (dir.canonicalize(), dir.join(curve).canonicalize()) {
+        (Ok(d), Ok(c)) => c.starts_with(d),
+        // a missing file is reported when it is read; judge the path as written meanwhile
+        _ => {
+            !curve.is_absolute()
+                && !curve
+                    .components()
+                    .any(|c| matches!(c, std::path::Component::ParentDir))
+        }
+    }
+}
+
+/// As [`load_dataset`]; with `allow_outside`, curve paths may also be absolute, climb out of the
+/// dataset folder with `..`, or be symbolic links to files elsewhere.
+pub fn load_dataset_with(
+    path: &Path,
+    allow_outside: bool,
+) -> Result<(FabricDataset, Vec<DatasetWarning>), DatasetError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| DatasetError {
+    let text = crate::io::read_text(path, MAX_TOML_BYTES).map_err(|e| DatasetError {
         file: file.clone(),
         line: None,
         message: format!("cannot read file: {e}"),
@@ -494,6 +513,17 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
         let curve = PathBuf::from(r.curve.get_ref());
         let csv_path = dir.join(&curve);
         let csv_name = csv_path.display().to_string();
+        let dir_or_here = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        if !allow_outside && (curve.is_absolute() || !inside(dir_or_here, &curve)) {
+            return Err(t.err(
+                r.curve.span(),
+                format!("{what}curve {csv_name} lies outside the dataset folder (an absolute path, `..` or a symbolic link out of it); pass --allow-outside to read it"),
+            ));
+        }
         let columns = match &r.columns {
             None => None,
             Some(c) => match c.get_ref().as_slice() {
@@ -530,7 +560,7 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
                 if !x.is_finite() || x.abs() >= gauge_length * 1e3 {
                     return Err(t.err(
                         v.span(),
-                        format!("{what}toe_mm must be a finite number smaller than the gauge length (negative for a preload), got {x}"),
+                        format!("{what}toe_mm must be a finite number smaller than the gauge length (negative for a preload), got {x:?}"),
                     ));
                 }
                 Some(x * 1e-3)
@@ -614,7 +644,7 @@ pub fn load_dataset(path: &Path) -> Result<(FabricDataset, Vec<DatasetWarning>),
                 if !(a > 0.0 && a < 90.0) {
                     return Err(t.err(
                         v.span(),
-                        format!("{what}drape_angle_deg must be in (0, 90), got {a}"),
+                        format!("{what}drape_angle_deg must be in (0, 90), got {a:?}"),
                     ));
                 }
                 a

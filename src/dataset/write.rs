@@ -92,7 +92,7 @@ pub fn write_dataset_with_comment(
         if let Some(parent) = p.parent() {
             std::fs::create_dir_all(parent)?;
         }
-        std::fs::write(p, curve_csv(t))?;
+        crate::io::write_atomic(&p, curve_csv(t))?;
     }
-    std::fs::write(dir.join("fabric.toml"), dataset_toml(data, comment))
+    crate::io::write_atomic(&dir.join("fabric.toml"), dataset_toml(data, comment))
 }

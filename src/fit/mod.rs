@@ -7,7 +7,8 @@
 //! - `thickness`: the thickness from the bends;
 //! - `validation`: predictions at the nominal angle, the misalignment diagnostic, the notes on
 //!   what the data determine;
-//! - [`report`]: files and tables.
+//! - [`report`]: files and tables;
+//! - [`verdict`]: every test against the paper's Table 3 errors and `--max-error`.
 //!
 //! Objective (paper Eq. 3): the sum of squared relative errors of the tensile forces and the
 //! drape angles, over every measured point of every repeat used, each curve weighted by
@@ -34,6 +35,7 @@ mod rigs;
 mod stages;
 mod thickness;
 mod validation;
+pub mod verdict;
 
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
@@ -88,6 +90,8 @@ pub struct FitOptions {
     pub toe: ToeMode,
     /// Bound of the validation runs' misalignment diagnostic, degrees (0: off).
     pub max_misalign_deg: f64,
+    /// A fitted test whose error exceeds this (mean relative) fails the fit: see [`verdict`].
+    pub max_error: f64,
 }
 
 impl Default for FitOptions {
@@ -108,6 +112,7 @@ impl Default for FitOptions {
             repeats: RepeatMode::All,
             toe: ToeMode::Auto,
             max_misalign_deg: 2.0,
+            max_error: 0.10,
         }
     }
 }
@@ -177,6 +182,8 @@ pub struct FitResult {
     /// what the data determine and what was assumed
     pub identifiability: Vec<String>,
     pub tests: Vec<TestOutcome>,
+    /// the `max_error` the fit was asked for (the table's `verdict` column reads it)
+    pub max_error: f64,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -462,5 +469,6 @@ pub fn fit(
         notes: f.notes,
         identifiability,
         tests,
+        max_error: opts.max_error,
     })
 }

@@ -4,6 +4,7 @@
 //! (measured dashed, fitted solid; full range and small-strain close-up).
 
 use super::{FitResult, TestOutcome};
+use crate::io::num;
 use crate::material::material_toml;
 use std::fmt::Write;
 
@@ -41,11 +42,16 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     let _ = writeln!(s, "identifiability = [{}]", ident.join(", "));
     let log: Vec<String> = r.degree_log.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "degree_choice = [{}]", log.join(", "));
+    let verdict = super::verdict::verdict(r, r.max_error);
+    let _ = writeln!(s, "max_error = {}", r.max_error);
+    let _ = writeln!(s, "passed = {}", verdict.passed());
+    let _ = writeln!(s, "verdict = {}", toml_str(&verdict.line));
     let _ = writeln!(s, "\n[fit.stage_seconds]");
     for (stage, t) in &r.stats.stage_seconds {
         let _ = writeln!(s, "{} = {t:.3}", toml_str(stage));
     }
-    for t in &r.tests {
+    let judged = super::verdict::judge(r, r.max_error);
+    for (t, judgement) in r.tests.iter().zip(&judged) {
         let _ = writeln!(s, "\n[[fit.test]]");
         let _ = writeln!(s, "kind = {}", toml_str(t.kind));
         let _ = writeln!(s, "angle_deg = {:?}", t.angle_deg);
@@ -89,6 +95,10 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
             let _ = writeln!(s, "misalign_deg = {m:.3}");
         }
         let _ = writeln!(s, "used_in_fit = {}", t.used_in_fit);
+        if let Some(e) = judgement.error {
+            let _ = writeln!(s, "judged_error = {e:.6}");
+        }
+        let _ = writeln!(s, "verdict = {}", toml_str(judgement.mark));
     }
     s
 }
@@ -96,7 +106,7 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
 /// The per-test table printed at the end of a fit.
 pub fn table(r: &FitResult) -> String {
     let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}\n",
+        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}\n",
         "kind",
         "angle",
         "curve",
@@ -109,13 +119,15 @@ pub fn table(r: &FitResult) -> String {
         "toe_mm",
         "mesh",
         "mesh_err",
-        "fitted"
+        "fitted",
+        "verdict"
     );
-    for t in &r.tests {
+    let judged = super::verdict::judge(r, r.max_error);
+    for (t, judgement) in r.tests.iter().zip(&judged) {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
         let _ = writeln!(
             s,
-            "{:<11} {:>7.1} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6}",
+            "{:<11} {:>7.1} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}",
             t.kind,
             t.angle_deg,
             t.curve.as_deref().unwrap_or("-"),
@@ -132,8 +144,10 @@ pub fn table(r: &FitResult) -> String {
             t.mesh.map_or("-".into(), |(a, b)| format!("{a}x{b}")),
             opt(t.mesh_error_est, &|e| format!("{:.2} %", 100.0 * e)),
             if t.used_in_fit { "yes" } else { "no" },
+            judgement.mark,
         );
     }
+    let _ = writeln!(s, "{}", super::verdict::verdict(r, r.max_error).line);
     s
 }
 
@@ -152,7 +166,14 @@ fn stem(t: &TestOutcome, i: usize) -> String {
 pub fn curve_csv(t: &TestOutcome) -> String {
     let mut s = String::from("elongation_mm,measured_n,fitted_n,rel_error\n");
     for &(e, m, f) in &t.points {
-        let _ = writeln!(s, "{},{},{},{}", e * 1e3, m, f, (f - m) / m);
+        let _ = writeln!(
+            s,
+            "{},{},{},{}",
+            num(e * 1e3),
+            num(m),
+            num(f),
+            num((f - m) / m)
+        );
     }
     s
 }
@@ -366,7 +387,7 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         }
         let stem = stem(t, i);
         let csv = dir.join(format!("{stem}.csv"));
-        std::fs::write(&csv, curve_csv(t))?;
+        crate::io::write_atomic(&csv, curve_csv(t))?;
         written.push(csv.display().to_string());
         let title = format!(
             "{} {}°: mean |relative error| {:.2} %",
@@ -376,7 +397,7 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         );
         if let Ok(svg) = curve_svg(t, &title) {
             let path = dir.join(format!("{stem}.svg"));
-            std::fs::write(&path, svg)?;
+            crate::io::write_atomic(&path, svg)?;
             written.push(path.display().to_string());
         }
     }
@@ -398,12 +419,12 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         let title = format!("{a}°: {} repeat(s), fit solid", at.len());
         if let Ok(svg) = angle_svg(&at, &title) {
             let path = dir.join(format!("angle-{a}.svg"));
-            std::fs::write(&path, svg)?;
+            crate::io::write_atomic(&path, svg)?;
             written.push(path.display().to_string());
         }
     }
     let summary = dir.join("summary.txt");
-    std::fs::write(&summary, table(r))?;
+    crate::io::write_atomic(&summary, table(r))?;
     written.push(summary.display().to_string());
     Ok(written)
 }

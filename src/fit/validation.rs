@@ -150,6 +150,10 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     // each way, at order 1.5 (the slowest measured on strips: the 45° strip's clamped
     // corners), so the estimate errs on the large side for 0° and 90°
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
+    f.say(&format!(
+        "report: mesh-error estimate (every strip again on {}x{})",
+        half.0, half.1
+    ));
     let coarse = f.predict_many(&jobs, half).ok();
     for c in 0..f.prep.curves.len() {
         let curve = f.prep.curves[c].clone();
@@ -187,7 +191,11 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             }
         }
         let (mut misalign, mut aligned) = (None, None);
-        if curve.role == Role::Validation {
+        if curve.role == Role::Validation && f.opts.max_misalign_deg > 0.0 {
+            f.say(&format!(
+                "report: misalignment diagnostic of {}",
+                t.curve.display()
+            ));
             if let Some(d) = f.misalignment(c, f.opts.ladder[0]) {
                 let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
                 misalign = Some(d);
@@ -229,6 +237,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             used_in_fit: curve.used_in_fit,
         });
     }
+    f.say("report: interpolation check (solves halfway between the nodes)");
     match f.interpolation_error() {
         Ok(worst) => f.notes.push(format!(
         "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}){}",

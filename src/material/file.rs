@@ -103,7 +103,8 @@ impl fmt::Display for MaterialFileError {
 /// Reads and checks a material file.
 pub fn load_material(path: &Path) -> Result<FabricMaterial, MaterialFileError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| MaterialFileError {
+    // regular files of at most 16 MiB: a FIFO or /dev/zero is refused, not read forever
+    let text = crate::io::read_text(path, 16 << 20).map_err(|e| MaterialFileError {
         path: name.clone(),
         line: None,
         message: format!("cannot read file: {e}"),
@@ -139,6 +140,10 @@ fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
     None
 }
 
+/// Moduli a material file may give, Pa: far below and above any fabric, but within what the
+/// solver's tolerances and double precision handle (1e-300 Pa gave negative forces).
+pub const MODULUS_RANGE: (f64, f64) = (1.0, 1e13);
+
 /// Parses and checks material TOML; `path` names it in errors.
 pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, MaterialFileError> {
     let raw: RawMaterial = toml::from_str(text).map_err(|e| MaterialFileError {
@@ -160,7 +165,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
                 path: path.to_string(),
                 line: line_of_key(text, None, key),
                 message: format!(
-                    "{key} must be a finite {} number, got {v}",
+                    "{key} must be a finite {} number, got {v:?}",
                     if allow_zero {
                         "non-negative"
                     } else {
@@ -180,7 +185,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             return Err(err(
                 None,
                 "a12_pa",
-                format!("a12_pa must be a finite number, got {v}"),
+                format!("a12_pa must be a finite number, got {v:?}"),
             ))
         }
         None => 0.5 * a11.min(a22),
@@ -231,7 +236,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             return Err(err(
                 Some(table),
                 "mu",
-                format!("[{table}] mu must sum to 1 (so that η'(0) = 1), got {sum}"),
+                format!("[{table}] mu must sum to 1 (so that η'(0) = 1), got {sum:?}"),
             ));
         }
         Ok(Eta {
@@ -249,7 +254,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
                 Some(x) => Err(err(
                     Some("cutoffs"),
                     key,
-                    format!("[cutoffs] {key} must be a number, got {x}"),
+                    format!("[cutoffs] {key} must be a number, got {x:?}"),
                 )),
             }
         };
@@ -287,12 +292,42 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             e12: (-e12_max, e12_max),
         };
     }
+    for (key, v) in [("a11_pa", a11), ("a22_pa", a22), ("g12_pa", g12)] {
+        if !(MODULUS_RANGE.0..=MODULUS_RANGE.1).contains(&v) {
+            return Err(err(
+                None,
+                key,
+                format!(
+                    "{key} = {v:?} is outside [{:e}, {:e}] Pa, the range this engine solves (woven fabrics: about 1e4 to 1e10)",
+                    MODULUS_RANGE.0, MODULUS_RANGE.1
+                ),
+            ));
+        }
+    }
     let stvk = OrthotropicStvk { a11, a22, a12, g12 };
     let mut law: Orthotropic = stvk.into();
     law.warp = eta("warp", raw.warp)?;
     law.weft = eta("weft", raw.weft)?;
     law.shear = eta("shear", raw.shear)?;
     law.cutoffs = cutoffs;
+    // the stress must rise with strain wherever the law is its own (inside the cut-offs; Green
+    // strain up to 1 where there is none): a falling branch has no stable equilibrium
+    for (table, key, eta, (lo, hi)) in [
+        ("warp", "e11_max", &law.warp, law.cutoffs.e11),
+        ("weft", "e22_max", &law.weft, law.cutoffs.e22),
+        ("shear", "e12_max", &law.shear, law.cutoffs.e12),
+    ] {
+        let e_max = lo.abs().max(hi.abs()).min(1.0);
+        if let Some(e) = eta.stress_peak(e_max) {
+            return Err(err(
+                Some(table),
+                "mu",
+                format!(
+                    "[{table}] the stress stops rising at Green strain {e:.4}, inside the law's valid range (up to {e_max}): lower [cutoffs] {key} below it or change mu and alpha"
+                ),
+            ));
+        }
+    }
     Ok(FabricMaterial {
         name: raw.name,
         areal_density: check("areal_density_g_m2", raw.areal_density_g_m2, false)? * 1e-3,

@@ -55,6 +55,37 @@ impl Eta {
         out.iter().all(|v| v.is_finite()).then_some(out)
     }
 
+    /// The first strain E in (0, `e_max`] at which the stress σ(E) = η'(E²)·E stops rising
+    /// (dσ/dE = η'(E²) + 2E²η''(E²) ≤ 0, or not finite), on a grid of 1000 steps refined by
+    /// bisection; `None` if it rises all the way. σ is odd in E, so this covers [−e_max, e_max].
+    pub fn stress_peak(&self, e_max: f64) -> Option<f64> {
+        let slope = |e: f64| {
+            let x = e * e;
+            self.eval(x)
+                .map_or(f64::NAN, |[_, d1, d2]| d1 + 2.0 * x * d2)
+        };
+        let falls = |e: f64| slope(e).is_nan() || slope(e) <= 0.0;
+        let n = 1000;
+        let mut prev = 0.0;
+        for i in 1..=n {
+            let e = e_max * i as f64 / n as f64;
+            if falls(e) {
+                let (mut lo, mut hi) = (prev, e);
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if falls(mid) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                return Some(hi);
+            }
+            prev = e;
+        }
+        None
+    }
+
     /// (∂η, ∂η', ∂η'') with respect to each μᵢ, then each αᵢ.
     fn param_derivs(&self, x: f64) -> Vec<[f64; 3]> {
         let b = x + 1.0;

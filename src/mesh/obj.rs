@@ -34,10 +34,17 @@ impl fmt::Display for ObjError {
     }
 }
 
+/// Largest vertex coordinate accepted: products of coordinates (metrics, curvatures) stay far
+/// from overflow.
+pub const MAX_COORDINATE: f64 = 1e100;
+
+/// Largest OBJ file read (a 100 000-face quad mesh is about 5 MB).
+pub const MAX_OBJ_BYTES: u64 = 1 << 30;
+
 /// Reads and checks an OBJ file.
 pub fn read_obj(path: &Path) -> Result<ObjMesh, ObjError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ObjError {
+    let text = crate::io::read_text(path, MAX_OBJ_BYTES).map_err(|e| ObjError {
         path: name.clone(),
         line: None,
         message: format!("cannot read file: {e}"),
@@ -55,6 +62,8 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
     let mut positions = Vec::new();
     let mut faces = Vec::new();
     let mut face_lines = Vec::new();
+    // a UTF-8 byte-order mark is not part of the first line's first word
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (i, raw) in text.lines().enumerate() {
         let lineno = i + 1;
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -71,6 +80,12 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                         .ok()
                         .filter(|x| x.is_finite())
                         .ok_or_else(|| err(lineno, format!("bad vertex coordinate '{w}'")))?;
+                    if c.abs() > MAX_COORDINATE {
+                        return Err(err(
+                            lineno,
+                            format!("vertex coordinate {w} is larger than {MAX_COORDINATE:e} in magnitude (the surface's derivatives would overflow)"),
+                        ));
+                    }
                 }
                 positions.push(xyz);
             }
@@ -102,7 +117,16 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
                             "vertex index 0 (OBJ indices start at 1)".into(),
                         ));
                     };
-                    face.push(resolved as u32);
+                    let resolved = u32::try_from(resolved).map_err(|_| {
+                        err(
+                            lineno,
+                            format!(
+                                "vertex index {n} is beyond the {} vertices a mesh may have",
+                                u32::MAX
+                            ),
+                        )
+                    })?;
+                    face.push(resolved);
                 }
                 if face.len() < 3 {
                     return Err(err(

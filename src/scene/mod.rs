@@ -74,7 +74,7 @@ fn positive(name: &str, v: f64) -> Result<f64, SceneError> {
         Ok(v)
     } else {
         Err(SceneError::Input(format!(
-            "{name} must be a positive number, got {v}"
+            "{name} must be a positive number, got {v:?}"
         )))
     }
 }
@@ -89,9 +89,10 @@ fn build_model(
 ) -> Result<ShellModel, SceneError> {
     if !angle_deg.is_finite() {
         return Err(SceneError::Input(format!(
-            "angle must be finite, got {angle_deg}"
+            "angle must be finite, got {angle_deg:?}"
         )));
     }
+    crate::limits::check_mesh(&format!("mesh {nx}x{ny}"), nx, ny).map_err(SceneError::Input)?;
     if nx == 0 || ny == 0 {
         return Err(SceneError::Input(
             "the mesh needs at least one face each way".into(),
@@ -296,7 +297,7 @@ impl TensileStrip {
         positive("gauge length", self.length)?;
         if let Some(dl) = elongations.iter().find(|d| !d.is_finite()) {
             return Err(SceneError::Input(format!(
-                "elongation must be finite, got {dl}"
+                "elongation must be finite, got {dl:?}"
             )));
         }
         let (_, ny) = self.mesh;
@@ -446,6 +447,16 @@ impl StripRig {
     /// F = rᵀg(x, k) and K λ = Tᵀ H r, dF/dk = rᵀ ∂g/∂k − λᵀ Tᵀ ∂g/∂k; one solve per point
     /// whatever the number of parameters).
     pub fn run(&mut self, sensitivities: bool) -> Result<Vec<TensilePoint>, SceneError> {
+        self.run_each(sensitivities, &mut |_| {})
+    }
+
+    /// As [`StripRig::run`], handing each point to `each` as soon as it is solved (a long
+    /// curve's rows are printed as they come).
+    pub fn run_each(
+        &mut self,
+        sensitivities: bool,
+        each: &mut dyn FnMut(&TensilePoint),
+    ) -> Result<Vec<TensilePoint>, SceneError> {
         let nn = self.model.num_nodes();
         let rest = self.model.basis.control_points.clone();
         let mut grad = vec![[0.0; 3]; nn];
@@ -544,12 +555,14 @@ impl StripRig {
                 self.tangents[i] = None;
                 Vec::new()
             };
-            out.push(TensilePoint {
+            let point = TensilePoint {
                 elongation: dl,
                 force,
                 report,
                 dforce,
-            });
+            };
+            each(&point);
+            out.push(point);
             self.equilibria[i] = Some(x.clone());
             previous = Some((dl, x));
         }

@@ -1,8 +1,9 @@
 //! The fabric commands of `ks-fit`: `fit` (a dataset to a material), `check` (what a dataset
 //! holds and what `fit` will do with it) and `synth` (a dataset from a material).
 
+use crate::guard::Guard;
 use kshell::material::load_material;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The fit's settings from its flags, checked.
 #[allow(clippy::too_many_arguments)]
@@ -16,13 +17,19 @@ pub fn fit_options(
     repeats: kshell::fit::RepeatMode,
     max_misalign: f64,
     nodes: usize,
+    max_error_percent: f64,
 ) -> Result<kshell::fit::FitOptions, String> {
+    if !(max_error_percent.is_finite() && max_error_percent > 0.0 && max_error_percent <= 1000.0) {
+        return Err(format!(
+            "--max-error must be a percentage in (0, 1000], got {max_error_percent:?}"
+        ));
+    }
     if max_degree == 0 || fixed_degree == Some(0) {
         return Err("degrees start at 1 (--max-degree, --degree)".into());
     }
     if !(0.0..=15.0).contains(&max_misalign) {
         return Err(format!(
-            "--max-misalign must be in [0, 15] degrees, got {max_misalign}"
+            "--max-misalign must be in [0, 15] degrees, got {max_misalign:?}"
         ));
     }
     if !(4..=200).contains(&nodes) {
@@ -30,6 +37,7 @@ pub fn fit_options(
     }
     let ladder =
         kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
+    kshell::converge::check_ladder(&ladder, false).map_err(|e| format!("--mesh-ladder: {e}"))?;
     Ok(kshell::fit::FitOptions {
         max_degree,
         fixed_degree,
@@ -40,19 +48,46 @@ pub fn fit_options(
         repeats,
         max_misalign_deg: max_misalign,
         nodes,
+        max_error: max_error_percent / 100.0,
         ..kshell::fit::FitOptions::default()
     })
 }
 
+/// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.
+fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
+    output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
+        PathBuf::from(format!(
+            "{}-fit.toml",
+            name.replace(|c: char| !c.is_alphanumeric() && c != '-', "_")
+        ))
+    })
+}
+
+/// Runs `ks-fit fit`; `Ok(false)` when the fit missed `--max-error` on a fitted test (the
+/// material and report are written all the same).
 pub fn cmd_fit(
-    file: &std::path::Path,
-    output: Option<&std::path::Path>,
-    report: Option<&std::path::Path>,
+    file: &Path,
+    output: Option<&Path>,
+    report: Option<&Path>,
     opts: &kshell::fit::FitOptions,
     quiet: bool,
-) -> Result<(), String> {
+    allow_outside: bool,
+    force: bool,
+) -> Result<bool, String> {
     use kshell::fit::{fit, report as fit_report};
-    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    let (data, warnings) =
+        kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
+    let out = fit_output(output, &data.name);
+    let mut guard = Guard::new(force);
+    guard.input(file);
+    let dir = file.parent().unwrap_or(Path::new(""));
+    for t in &data.tensile {
+        guard.input(&dir.join(&t.curve));
+    }
+    guard.file("-o", &out)?;
+    if let Some(r) = report {
+        guard.folder("--report", r, "summary.txt")?;
+    }
     for w in &warnings {
         eprintln!("ks-fit: {w}");
     }
@@ -62,27 +97,22 @@ pub fn cmd_fit(
         }
     };
     let result = fit(&data, opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
-    let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
-        PathBuf::from(format!(
-            "{}-fit.toml",
-            data.name
-                .replace(|c: char| !c.is_alphanumeric() && c != '-', "_")
-        ))
-    });
     let text = fit_report::fit_toml(&result, &file.display().to_string());
-    std::fs::write(&out, text).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    kshell::io::write_atomic(&out, text)
+        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     if let Some(dir) = report {
+        progress("writing the report (CSV and SVG of every test)");
         let files = fit_report::write_report(&result, dir)
             .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
-        if !quiet {
-            eprintln!(
-                "ks-fit: fit: report: {} files in {}",
-                files.len(),
-                dir.display()
-            );
-        }
+        progress(&format!(
+            "report: {} files in {}",
+            files.len(),
+            dir.display()
+        ));
     }
-    for line in result.degree_log.iter().chain(&result.notes) {
+    // the degree choice was shown as progress; print it here only when progress was off
+    let shown = if quiet { &result.degree_log[..] } else { &[] };
+    for line in shown.iter().chain(&result.notes) {
         println!("{line}");
     }
     for line in &result.identifiability {
@@ -109,11 +139,12 @@ pub fn cmd_fit(
         stages.join(", ")
     );
     println!("wrote {}", out.display());
-    Ok(())
+    Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
 }
 
-pub fn cmd_check(file: &std::path::Path) -> Result<(), String> {
-    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
+    let (data, warnings) =
+        kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
     println!("dataset: {}", file.display());
     println!("name: {}", data.name);
     match data.areal_density {
@@ -243,11 +274,15 @@ pub fn cmd_check(file: &std::path::Path) -> Result<(), String> {
 }
 
 pub fn cmd_synth(
-    material: &std::path::Path,
-    out: &std::path::Path,
+    material: &Path,
+    out: &Path,
     opts: &kshell::synth::SynthOptions,
+    force: bool,
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
+    let mut guard = Guard::new(force);
+    guard.input(material);
+    guard.folder("--out", out, "fabric.toml")?;
     let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
     let data = kshell::synth::synthesize(&mat, opts, &mut progress).map_err(|e| e.to_string())?;
     let comment = format!(

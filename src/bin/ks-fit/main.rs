@@ -3,6 +3,7 @@
 //! Every user error is one line on stderr starting with `ks-fit: error:` and exit code 2.
 
 mod fabric;
+mod guard;
 mod mesh;
 
 use clap::{Parser, Subcommand};
@@ -14,6 +15,7 @@ use kshell::subdiv::BoundaryRule;
 use mesh::{cmd_demo, cmd_mesh};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::time::Instant;
 
 #[derive(Parser)]
 #[command(
@@ -24,6 +26,13 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Write outputs even where they would replace an input file, a dataset or a folder that
+    /// holds other files (outputs are always written to a temporary file and renamed).
+    #[arg(long, global = true)]
+    force: bool,
+    /// Largest mesh (faces) any command builds; a shell solve needs about 60 KB per face.
+    #[arg(long, global = true, default_value_t = kshell::limits::DEFAULT_MAX_FACES)]
+    max_faces: usize,
 }
 
 #[derive(Subcommand)]
@@ -56,13 +65,13 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         angle: f64,
         /// Strip width, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         width: f64,
         /// Gauge length, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         length: f64,
         /// Final elongation, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         to: f64,
         /// Number of equal elongation steps (rows printed).
         #[arg(long)]
@@ -79,10 +88,10 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         angle: f64,
         /// Overhang past the platform edge, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         overhang: f64,
         /// Strip width, mm.
-        #[arg(long, default_value_t = 25.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
         width: f64,
         #[command(flatten)]
         solve: SceneArgs,
@@ -142,12 +151,23 @@ enum Command {
         /// Elongation nodes per strip at which the model is solved (interpolated between).
         #[arg(long, default_value_t = 12)]
         nodes: usize,
+        /// Largest acceptable error of a fitted test, percent (mean |relative error| of a
+        /// curve, relative drape-angle error of a bend). Above it the fit still writes the
+        /// material and report, prints FIT FAILED and exits with code 3.
+        #[arg(long, default_value_t = 10.0)]
+        max_error: f64,
+        /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
+        #[arg(long)]
+        allow_outside: bool,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
     Check {
         /// The dataset's fabric.toml.
         file: PathBuf,
+        /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
+        #[arg(long)]
+        allow_outside: bool,
     },
     /// Write a synthetic dataset from a material through the virtual lab: tensile strips at
     /// 90, 0, 45, 22.5 and 67.5 degrees, and the warp and weft cantilevers at 41.5 degrees.
@@ -226,13 +246,13 @@ enum ConvergeScene {
         #[arg(long, allow_negative_numbers = true)]
         angle: f64,
         /// Strip width, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         width: f64,
         /// Gauge length, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         length: f64,
         /// Elongation at which the force is compared, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         elongation: f64,
         #[command(flatten)]
         study: StudyArgs,
@@ -244,10 +264,10 @@ enum ConvergeScene {
         #[arg(long, allow_negative_numbers = true)]
         angle: f64,
         /// Overhang, mm.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         overhang: f64,
         /// Strip width, mm.
-        #[arg(long, default_value_t = 25.0)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
         width: f64,
         #[command(flatten)]
         study: StudyArgs,
@@ -303,19 +323,44 @@ fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
     }
 }
 
-/// A positive, finite number of millimetres, in metres.
+/// Lengths the scene commands accept, mm: a strip from 0.1 mm (a yarn) to a 2 m sheet.
+const MM_RANGE: (f64, f64) = (0.1, 2000.0);
+
+/// Most elongation steps of `tensile` (each one an equilibrium solve).
+const MAX_STEPS: usize = 10_000;
+
+/// A positive number of millimetres up to the top of [`MM_RANGE`], in metres; a strip's
+/// dimensions (not an elongation) are also at least its bottom.
 fn mm(name: &str, v: f64) -> Result<f64, String> {
-    if v.is_finite() && v > 0.0 {
-        Ok(v * 1e-3)
+    let is_elongation = name == "to" || name == "elongation";
+    if !(v.is_finite() && v > 0.0 && v <= MM_RANGE.1) {
+        return Err(format!(
+            "--{name} must be a positive number of millimetres up to {}, got {v:?}",
+            MM_RANGE.1
+        ));
+    }
+    if !is_elongation && v < MM_RANGE.0 {
+        return Err(format!(
+            "--{name} must be at least {} mm, got {v:?}",
+            MM_RANGE.0
+        ));
+    }
+    Ok(v * 1e-3)
+}
+
+/// A cut angle in [-360, 360] degrees.
+fn angle_deg(v: f64) -> Result<f64, String> {
+    if v.is_finite() && v.abs() <= 360.0 {
+        Ok(v)
     } else {
-        Err(format!(
-            "--{name} must be a positive number of millimetres, got {v}"
-        ))
+        Err(format!("--angle must be in [-360, 360] degrees, got {v:?}"))
     }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let force = cli.force;
+    kshell::limits::set_max_faces(cli.max_faces);
     let result = match cli.command {
         Command::Mesh {
             file,
@@ -329,7 +374,9 @@ fn main() -> ExitCode {
             boundary,
             subdivide,
             write.as_deref(),
-        ),
+            force,
+        )
+        .map(|()| true),
         Command::Tensile {
             material,
             angle,
@@ -338,17 +385,20 @@ fn main() -> ExitCode {
             to,
             steps,
             solve,
-        } => cmd_tensile(&material, angle, width, length, to, steps, &solve),
+        } => cmd_tensile(&material, angle, width, length, to, steps, &solve).map(|()| true),
         Command::Bend {
             material,
             angle,
             overhang,
             width,
             solve,
-        } => cmd_bend(&material, angle, overhang, width, &solve),
-        Command::Converge { scene } => cmd_converge(scene),
-        Command::Demo => cmd_demo(),
-        Command::Check { file } => cmd_check(&file),
+        } => cmd_bend(&material, angle, overhang, width, &solve).map(|()| true),
+        Command::Converge { scene } => cmd_converge(scene, force).map(|()| true),
+        Command::Demo => cmd_demo().map(|()| true),
+        Command::Check {
+            file,
+            allow_outside,
+        } => cmd_check(&file, allow_outside).map(|()| true),
         Command::Fit {
             file,
             output,
@@ -363,6 +413,8 @@ fn main() -> ExitCode {
             repeat,
             max_misalign,
             nodes,
+            max_error,
+            allow_outside,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
@@ -373,8 +425,19 @@ fn main() -> ExitCode {
             repeat,
             max_misalign,
             nodes,
+            max_error,
         )
-        .and_then(|opts| cmd_fit(&file, output.as_deref(), report.as_deref(), &opts, quiet)),
+        .and_then(|opts| {
+            cmd_fit(
+                &file,
+                output.as_deref(),
+                report.as_deref(),
+                &opts,
+                quiet,
+                allow_outside,
+                force,
+            )
+        }),
         Command::Synth {
             material,
             out,
@@ -397,10 +460,14 @@ fn main() -> ExitCode {
                 seed,
                 mesh,
             },
-        ),
+            force,
+        )
+        .map(|()| true),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(true) => ExitCode::SUCCESS,
+        // the fit ran but missed --max-error on a fitted test (the verdict line says which)
+        Ok(false) => ExitCode::from(3),
         Err(msg) => {
             eprintln!("ks-fit: error: {msg}");
             ExitCode::from(2)
@@ -419,11 +486,15 @@ fn cmd_tensile(
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
-    if steps == 0 {
-        return Err("--steps must be at least 1".into());
+    let angle = angle_deg(angle)?;
+    if to > 2.0 * l {
+        return Err(format!(
+            "--to {} mm is more than twice the gauge length (200 % strain)",
+            to * 1e3
+        ));
     }
-    if !angle.is_finite() {
-        return Err(format!("--angle must be a number of degrees, got {angle}"));
+    if !(1..=MAX_STEPS).contains(&steps) {
+        return Err(format!("--steps must be in [1, {MAX_STEPS}], got {steps}"));
     }
     let mut strip = TensileStrip::new(w, l, angle);
     if let Some(m) = args.mesh {
@@ -433,11 +504,23 @@ fn cmd_tensile(
         strip.boundary = b;
     }
     strip.solver = args.solver();
+    // the mesh, and every step's equilibrium the strip keeps (3 doubles a node), within limits
+    let (nx, ny) = strip.mesh;
+    let kept = steps.saturating_mul((nx + 3) * (ny + 3) * 24) / kshell::limits::BYTES_PER_FACE;
+    kshell::limits::check_faces(
+        &format!("--mesh {nx}x{ny} with {steps} steps"),
+        nx.saturating_mul(ny).saturating_add(kept),
+    )?;
     let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
-    let curve = strip.run(&mat, &dl).map_err(|e| e.to_string())?;
+    let mut rig = strip.rig(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
-    for p in &curve {
-        println!("{},{}", p.elongation * 1e3, p.force);
+    let (start, mut shown) = (Instant::now(), 0.0);
+    let mut each = |p: &kshell::scene::TensilePoint| {
+        println!(
+            "{},{}",
+            kshell::io::num(p.elongation * 1e3),
+            kshell::io::num(p.force)
+        );
         if args.verbose {
             eprintln!(
                 "elongation {:.4} mm: {}",
@@ -445,7 +528,18 @@ fn cmd_tensile(
                 describe(&p.report)
             );
         }
-    }
+        // a long curve says how far it has come every few seconds
+        let t = start.elapsed().as_secs_f64();
+        if t - shown > 5.0 {
+            shown = t;
+            eprintln!(
+                "ks-fit: tensile: {:.4} of {:.4} mm after {t:.0} s",
+                p.elongation * 1e3,
+                to * 1e3
+            );
+        }
+    };
+    rig.run_each(false, &mut each).map_err(|e| e.to_string())?;
     Ok(())
 }
 
@@ -458,9 +552,7 @@ fn cmd_bend(
 ) -> Result<(), String> {
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
-    if !angle.is_finite() {
-        return Err(format!("--angle must be a number of degrees, got {angle}"));
-    }
+    let angle = angle_deg(angle)?;
     let mut bend = CantileverBend::new(w, l, angle);
     if let Some(m) = args.mesh {
         if m.1 < 2 {
@@ -486,7 +578,7 @@ fn cmd_bend(
     Ok(())
 }
 
-fn cmd_converge(scene: ConvergeScene) -> Result<(), String> {
+fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
     use kshell::converge::{default_ladder, parse_ladder, study};
     let (study_args, aspect, title) = match &scene {
         ConvergeScene::Tensile {
@@ -513,22 +605,70 @@ fn cmd_converge(scene: ConvergeScene) -> Result<(), String> {
             format!("cantilever {angle}°, {width} mm wide, overhang {overhang} mm"),
         ),
     };
-    if !aspect.is_finite() || aspect <= 0.0 {
-        return Err("width and length/overhang must be positive".into());
+    match &scene {
+        ConvergeScene::Tensile {
+            angle,
+            width,
+            length,
+            elongation,
+            ..
+        } => {
+            let (_, l, e) = (
+                mm("width", *width)?,
+                mm("length", *length)?,
+                mm("elongation", *elongation)?,
+            );
+            angle_deg(*angle)?;
+            if e > 2.0 * l {
+                return Err(
+                    "--elongation is more than twice the gauge length (200 % strain)".into(),
+                );
+            }
+        }
+        ConvergeScene::Bend {
+            angle,
+            overhang,
+            width,
+            ..
+        } => {
+            mm("width", *width)?;
+            mm("overhang", *overhang)?;
+            angle_deg(*angle)?;
+        }
     }
     let ladder = match &study_args.mesh_ladder {
         Some(l) => parse_ladder(l).map_err(|e| format!("--mesh-ladder: {e}"))?,
         None => {
-            if study_args.levels == 0 {
-                return Err("--levels must be at least 1".into());
+            if !(1..=kshell::converge::MAX_LEVELS).contains(&study_args.levels) {
+                return Err(format!(
+                    "--levels must be in [1, {}], got {}",
+                    kshell::converge::MAX_LEVELS,
+                    study_args.levels
+                ));
             }
             default_ladder(aspect, study_args.levels)
         }
     };
+    let flag = if study_args.mesh_ladder.is_some() {
+        "--mesh-ladder"
+    } else {
+        "--levels"
+    };
+    kshell::converge::check_ladder(&ladder, true).map_err(|e| format!("{flag}: {e}"))?;
     if let Some(t) = study_args.tol {
         if !(t.is_finite() && t > 0.0) {
-            return Err(format!("--tol must be a positive number, got {t}"));
+            return Err(format!("--tol must be a positive number, got {t:?}"));
         }
+    }
+    let mut guard = guard::Guard::new(force);
+    guard.input(match &scene {
+        ConvergeScene::Tensile { material, .. } | ConvergeScene::Bend { material, .. } => material,
+    });
+    if let Some(p) = &study_args.csv {
+        guard.file("--csv", p)?;
+    }
+    if let Some(p) = &study_args.plot {
+        guard.file("--plot", p)?;
     }
     let dofs = |(nx, ny): (usize, usize), rule: BoundaryRule| match rule {
         BoundaryRule::Phantom => 3 * (nx + 1) * (ny + 1),
@@ -614,12 +754,13 @@ fn cmd_converge(scene: ConvergeScene) -> Result<(), String> {
         }
     }
     if let Some(p) = &study_args.csv {
-        std::fs::write(p, result.csv())
+        kshell::io::write_atomic(p, result.csv())
             .map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
     }
     if let Some(p) = &study_args.plot {
         let svg = result.svg(&title)?;
-        std::fs::write(p, svg).map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+        kshell::io::write_atomic(p, svg)
+            .map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
     }
     Ok(())
 }

@@ -20,10 +20,26 @@ pub fn cmd_mesh(
     rule: BoundaryRule,
     subdivide: usize,
     write: Option<&std::path::Path>,
+    force: bool,
 ) -> Result<(), String> {
     let name = file.display().to_string();
+    let mut guard = crate::guard::Guard::new(force);
+    guard.input(file);
+    if let Some(out) = write {
+        guard.file("--write", out)?;
+    }
     let obj = read_obj(file).map_err(|e| e.to_string())?;
     let mut mesh = obj.mesh;
+    // each step makes a quad of every corner of every face: check the final count first
+    let corners: usize = mesh.faces.iter().map(|f| f.len()).sum();
+    let faces = match subdivide {
+        0 => mesh.faces.len(),
+        n => u32::try_from(n - 1)
+            .ok()
+            .and_then(|e| 4usize.checked_pow(e))
+            .map_or(usize::MAX, |k| corners.saturating_mul(k)),
+    };
+    kshell::limits::check_faces(&format!("--subdivide {subdivide}"), faces)?;
     for _ in 0..subdivide {
         mesh = refine(&mesh);
     }
@@ -34,10 +50,6 @@ pub fn cmd_mesh(
             mesh.faces.iter().filter(|f| f.len() != 4).count()
         ));
         mesh = refine(&mesh);
-    }
-    if let Some(out) = write {
-        let text = write_obj(&mesh, &format!("written by ks-fit from {name}"));
-        std::fs::write(out, text).map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
     }
     let surface = LimitSurface::new(&mesh, rule).map_err(|e| format!("{name}: {e}"))?;
     match limit {
@@ -59,6 +71,11 @@ pub fn cmd_mesh(
             let p = surface
                 .evaluate(face, uv[0], uv[1])
                 .map_err(|e| format!("{name}: {e}"))?;
+            if p.d.iter().flatten().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "{name}: the limit surface overflows at this point (coordinates too large for double precision)"
+                ));
+            }
             for n in &notes {
                 eprintln!("ks-fit: note: {n}");
             }
@@ -73,6 +90,12 @@ pub fn cmd_mesh(
             }
             print_summary(&mesh, &surface);
         }
+    }
+    // written last, once everything asked for has worked
+    if let Some(out) = write {
+        let text = write_obj(&mesh, &format!("written by ks-fit from {name}"));
+        kshell::io::write_atomic(out, text)
+            .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
     }
     Ok(())
 }

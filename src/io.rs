@@ -1,0 +1,108 @@
+//! Writing results safely and printing numbers plainly: every file kshell writes goes through
+//! [`write_atomic`] (a temporary file in the same folder, renamed over the target, so a crash or
+//! Ctrl-C never leaves a half-written material or curve), and every number in a CSV through
+//! [`num`] (shortest round-trip digits, exponent form outside [1e-5, 1e16)).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The temporary file next to `path` that [`write_atomic`] writes first.
+fn temporary_for(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    path.with_file_name(format!(".{name}.ks-tmp-{}", std::process::id()))
+}
+
+/// Writes `contents` to `path` through a temporary file in the same folder and a rename: readers
+/// see the old file or the new one, never a truncated one. The temporary file is removed on error.
+pub fn write_atomic(path: &Path, contents: impl AsRef<[u8]>) -> std::io::Result<()> {
+    let tmp = temporary_for(path);
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(contents.as_ref())?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// A text input's contents: a regular file (not a FIFO, a device or a folder, which could block
+/// or never end) of at most `max_bytes`, in UTF-8. The message says which rule was broken.
+pub fn read_text(path: &Path, max_bytes: u64) -> Result<String, String> {
+    let meta = std::fs::metadata(path).map_err(|e| e.to_string())?;
+    if !meta.is_file() {
+        return Err("not a regular file".into());
+    }
+    if meta.len() > max_bytes {
+        return Err(format!(
+            "{} bytes, more than the {} MiB allowed",
+            meta.len(),
+            max_bytes >> 20
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    String::from_utf8(bytes).map_err(|_| "not UTF-8 text".to_string())
+}
+
+/// A number for a CSV or TOML value: the shortest digits that read back to the same `f64`, in
+/// plain notation for magnitudes in [1e-5, 1e16) and exponent notation outside (never the
+/// 300-digit expansion `{}` prints for 1e300).
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_round_trip_in_few_characters() {
+        for x in [
+            0.0,
+            1.0,
+            -2.5,
+            0.1 + 0.2,
+            1e-300,
+            1e300,
+            -1.7976931348623157e308,
+            5e-324,
+            123456.789,
+            1e-5,
+            9.99e-6,
+            1e16,
+        ] {
+            let s = num(x);
+            assert_eq!(s.parse::<f64>().unwrap(), x, "{s}");
+            assert!(s.len() <= 24, "{x}: {s}");
+        }
+        assert_eq!(num(1e300), "1e300");
+        assert_eq!(num(0.25), "0.25");
+        assert_eq!(num(2e-6), "2e-6");
+    }
+
+    #[test]
+    fn atomic_write_replaces_and_leaves_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("kshell-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("a.txt");
+        write_atomic(&p, "first").unwrap();
+        write_atomic(&p, "second").unwrap();
+        assert_eq!(std::fs::read_to_string(&p).unwrap(), "second");
+        let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(names.len(), 1, "a temporary file was left behind");
+        // a folder that does not exist: an error, and nothing created
+        assert!(write_atomic(&dir.join("no/such/b.txt"), "x").is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
