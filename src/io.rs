@@ -62,6 +62,16 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// A table cell: `decimals` fixed decimals for magnitudes below 1e9, exponent form above (a
+/// width typed as 1e300 prints as `1.0000e300`, not as 300 digits).
+pub fn cell(x: f64, decimals: usize) -> String {
+    if x.abs() < 1e9 || !x.is_finite() {
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.decimals$e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,6 +99,8 @@ mod tests {
         assert_eq!(num(1e300), "1e300");
         assert_eq!(num(0.25), "0.25");
         assert_eq!(num(2e-6), "2e-6");
+        assert_eq!(cell(1e300, 4), "1.0000e300");
+        assert_eq!(cell(12.345678, 2), "12.35");
     }
 
     #[test]

@@ -285,6 +285,24 @@ fn a_corrupt_force_is_an_error_naming_its_line() {
         &["check", s(&toml)],
         "more than ten times every other force",
     );
+    // a curve typed in metres ends at 0.007 % strain: check warns
+    let metres: String = curve()
+        .lines()
+        .map(|l| match l.split_once(',') {
+            Some((e, f)) if e.parse::<f64>().is_ok() => {
+                format!("{},{f}\n", e.parse::<f64>().unwrap() / 1000.0)
+            }
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    let toml = dataset("hostile-metres", &metres);
+    let (rc, out, err) = ks_fit(&["check", s(&toml)]);
+    assert_eq!(rc, 0, "{err}");
+    assert!(
+        out.contains("warp.csv:11: warning: the curve ends at 0.0067 % strain"),
+        "{out}"
+    );
+    assert!(out.contains("are the elongations in metres?"), "{out}");
     let zero: String = (1..=5).fold("elongation_mm,force_n\n".into(), |c, i| {
         c + &format!("{i},0\n")
     });

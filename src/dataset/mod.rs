@@ -377,6 +377,19 @@ fn curve_warnings(
             ),
         ));
     }
+    // a strip test runs to a few percent strain at least; a curve that ends below 0.1 % with
+    // the largest force of a real test was most likely typed in metres
+    if c.lines.len() > 1 && max_strain < 1e-3 && fmax >= floor {
+        let last = c.lines.len() - 1;
+        out.push(warn(
+            c.lines[last],
+            format!(
+                "the curve ends at {:.4} % strain ({} mm over a {gauge_mm} mm gauge length) with forces up to {fmax} N: are the elongations in metres? (the header's unit must be mm)",
+                100.0 * max_strain,
+                crate::io::num(c.elongation_mm[last])
+            ),
+        ));
+    }
 }
 
 /// Largest curve file read (a million rows of a machine export are about 40 MB).

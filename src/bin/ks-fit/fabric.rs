@@ -2,6 +2,7 @@
 //! holds and what `fit` will do with it) and `synth` (a dataset from a material).
 
 use crate::guard::Guard;
+use kshell::io::{cell, num};
 use kshell::material::load_material;
 use std::path::{Path, PathBuf};
 
@@ -148,12 +149,12 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     println!("dataset: {}", file.display());
     println!("name: {}", data.name);
     match data.areal_density {
-        Some(rho) => println!("areal density: {} g/m²", rho * 1e3),
+        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
         None => println!("areal density: not given"),
     }
     println!(
         "thickness: {} mm (measured; the fit's initial guess)",
-        data.thickness * 1e3
+        num(data.thickness * 1e3)
     );
     println!(
         "tests: {} tensile, {} bend",
@@ -199,14 +200,14 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
             Err(_) => String::new(),
         };
         println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14.4} {:>12.4}  {role} ({}{toe})",
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
             "tensile",
             t.angle_deg,
-            t.width * 1e3,
-            t.gauge_length * 1e3,
+            num(t.width * 1e3),
+            num(t.gauge_length * 1e3),
             t.elongation.len(),
-            max_elong * 1e3,
-            max_force,
+            cell(max_elong * 1e3, 4),
+            cell(max_force, 4),
             t.curve.display()
         );
     }
@@ -220,8 +221,8 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
             "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
             "bend",
             b.angle_deg,
-            b.width * 1e3,
-            b.overhang * 1e3,
+            num(b.width * 1e3),
+            num(b.overhang * 1e3),
             "-",
             "-",
             "-",
@@ -238,7 +239,7 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
         ("poisson_12", k.poisson_12),
     ] {
         if let Some(v) = v {
-            info.push(format!("known: {name} = {v} (held by the fit)"));
+            info.push(format!("known: {name} = {} (held by the fit)", num(v)));
         }
     }
     let fitted_at = |a: f64| {
