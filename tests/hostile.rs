@@ -349,6 +349,11 @@ fn materials_that_cannot_be_solved_are_refused() {
     let args = run(&cut);
     let (rc, _, err) = ks_fit(&args.iter().map(|a| a.as_str()).collect::<Vec<_>>());
     assert_eq!(rc, 0, "{err}");
+    // the same bound on a dataset's [known] moduli (the fit would write them into a material)
+    let toml = dataset("hostile-known", &curve());
+    let text = std::fs::read_to_string(&toml).unwrap();
+    std::fs::write(&toml, format!("{text}[known]\na22_pa = 1e-300\n")).unwrap();
+    refused(&["check", s(&toml)], "fabric.toml:9: [known] a22_pa = 1e-300 is outside");
     // negative mu or alpha are legitimate as such: a softening term that keeps the stress rising
     let soft = write(
         "soft.toml",
@@ -388,6 +393,15 @@ fn outputs_never_overwrite_inputs() {
         err.contains("does not exist") && !err.contains("fit: ["),
         "{err}"
     );
+    // --report naming a file: refused before the fit, and no material written
+    let file = dir.join("notes.txt");
+    std::fs::write(&file, "x").unwrap();
+    refused(
+        &["fit", s(&toml), "-o", s(&dir.join("y.toml")), "--report", s(&file)],
+        "is a file, not a folder",
+    );
+    assert!(!dir.join("y.toml").exists());
+    std::fs::remove_file(&file).unwrap();
     // mesh --write over its own input: refused, and the file is left as it was
     let work = folder("hostile-mesh-write");
     let obj = work.join("cube.obj");

@@ -435,11 +435,23 @@ fn read_known(t: &Toml, raw: Option<&RawKnown>) -> Result<Known, DatasetError> {
         }
         v => v.as_ref().map(|v| *v.get_ref()),
     };
+    // moduli within what a material file may hold (the fit writes one)
+    let modulus = |key: &str, v: &Option<Spanned<f64>>| -> Result<Option<f64>, DatasetError> {
+        let x = pos(key, v, 1.0)?;
+        let (lo, hi) = crate::material::MODULUS_RANGE;
+        match (x, v) {
+            (Some(x), Some(v)) if !(lo..=hi).contains(&x) => Err(t.err(
+                v.span(),
+                format!("[known] {key} = {x:?} is outside [{lo:e}, {hi:e}] Pa"),
+            )),
+            _ => Ok(x),
+        }
+    };
     let known = Known {
-        a11: pos("a11_pa", &k.a11_pa, 1.0)?,
-        a22: pos("a22_pa", &k.a22_pa, 1.0)?,
+        a11: modulus("a11_pa", &k.a11_pa)?,
+        a22: modulus("a22_pa", &k.a22_pa)?,
         a12,
-        g12: pos("g12_pa", &k.g12_pa, 1.0)?,
+        g12: modulus("g12_pa", &k.g12_pa)?,
         thickness: pos("thickness_mm", &k.thickness_mm, 1e-3)?,
         poisson_12,
     };

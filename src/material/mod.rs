@@ -9,7 +9,9 @@
 mod file;
 mod orthotropic;
 
-pub use file::{load_material, material_toml, parse_material, FabricMaterial, MaterialFileError};
+pub use file::{
+    load_material, material_toml, parse_material, FabricMaterial, MaterialFileError, MODULUS_RANGE,
+};
 pub use orthotropic::{Cutoffs, Eta, Orthotropic, ParamResponse};
 
 use nalgebra::{Matrix3, Vector3};
