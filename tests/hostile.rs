@@ -353,7 +353,10 @@ fn materials_that_cannot_be_solved_are_refused() {
     let toml = dataset("hostile-known", &curve());
     let text = std::fs::read_to_string(&toml).unwrap();
     std::fs::write(&toml, format!("{text}[known]\na22_pa = 1e-300\n")).unwrap();
-    refused(&["check", s(&toml)], "fabric.toml:9: [known] a22_pa = 1e-300 is outside");
+    refused(
+        &["check", s(&toml)],
+        "fabric.toml:9: [known] a22_pa = 1e-300 is outside",
+    );
     // negative mu or alpha are legitimate as such: a softening term that keeps the stress rising
     let soft = write(
         "soft.toml",
@@ -397,7 +400,14 @@ fn outputs_never_overwrite_inputs() {
     let file = dir.join("notes.txt");
     std::fs::write(&file, "x").unwrap();
     refused(
-        &["fit", s(&toml), "-o", s(&dir.join("y.toml")), "--report", s(&file)],
+        &[
+            "fit",
+            s(&toml),
+            "-o",
+            s(&dir.join("y.toml")),
+            "--report",
+            s(&file),
+        ],
         "is a file, not a folder",
     );
     assert!(!dir.join("y.toml").exists());
