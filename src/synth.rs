@@ -104,10 +104,11 @@ impl Rng {
     }
 }
 
-/// Most points per curve (a machine export rarely has more than a few thousand).
-pub const MAX_POINTS: usize = 100_000;
-/// Most repeats per angle.
-pub const MAX_REPEATS: usize = 100;
+/// Most points per curve (each one an equilibrium solve of the strip; a lab curve's shape needs
+/// tens).
+pub const MAX_POINTS: usize = 2_000;
+/// Most repeats per angle (labs pull 3–5 strips per direction).
+pub const MAX_REPEATS: usize = 20;
 /// Largest standard deviation of the cut angle, degrees (a lab cuts within a few degrees).
 pub const MAX_MISALIGN_DEG: f64 = 15.0;
 

@@ -172,6 +172,27 @@ fn flags_out_of_range_are_named_with_their_range() {
         "misalignment must be",
     );
     refused(&tensile(&["--to", "500"]), "twice the gauge length");
+    refused(
+        &[
+            "fit",
+            "paper_repro/fabrics/cotton/fabric.toml",
+            "--degree",
+            "50",
+        ],
+        "degrees go up to 8",
+    );
+    refused(
+        &[
+            "synth",
+            "--material",
+            MATERIAL,
+            "--out",
+            s(&dir.join("d")),
+            "--points",
+            "100000",
+        ],
+        "at most 2000 points",
+    );
 }
 
 #[test]

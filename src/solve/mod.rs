@@ -313,7 +313,46 @@ pub struct NewtonOptions {
     pub precision: Precision,
     /// Most refinement corrections per linear solve (0: none).
     pub refine_steps: usize,
+    /// How a load is brought on ([`continuation`]) and how the first steps are accepted.
+    pub strategy: Strategy,
+    /// The first this-many Newton iterations take the full step wherever the energy is
+    /// defined, even uphill (non-monotone: the energy line search would cut the first
+    /// membrane-stretching step of a heavy cantilever to nothing); 0: always line-searched.
+    pub full_steps: usize,
 }
+
+/// How [`continuation`] brings on a load.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Strategy {
+    /// Load steps from 1/8, doubled after easy solves, halved after failed ones; each solve
+    /// Newton with an energy line search and the backward-Euler fallback.
+    Ramp,
+    /// First the whole load at once by full-step Newton (at most [`FULL_STEP_ITERATIONS`]
+    /// iterations, kept only if it converges to a stable equilibrium), then the ramp from the
+    /// start if it did not. The default: on the seven of ten cantilevers of the example material
+    /// (20–400 mm, 0° and 45°) that either strategy solves, and the heavy D1388 cantilever, it
+    /// took 1448 Newton iterations where the ramp took 1774 (heavy cantilever at 4×16: 15
+    /// against 108), drape angles equal to 1e-9; where full steps fail it costs 25 more.
+    #[default]
+    FullStep,
+}
+
+impl std::str::FromStr for Strategy {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "ramp" => Ok(Self::Ramp),
+            "full-step" => Ok(Self::FullStep),
+            _ => Err(format!(
+                "unknown strategy '{s}' (expected ramp or full-step)"
+            )),
+        }
+    }
+}
+
+/// Iteration budget of the full-step attempt (plain full-step Newton brings the heavy
+/// ASTM D1388 cantilever from flat in 15).
+pub const FULL_STEP_ITERATIONS: usize = 25;
 
 impl Default for NewtonOptions {
     fn default() -> Self {
@@ -323,16 +362,19 @@ impl Default for NewtonOptions {
             fallback: true,
             precision: Precision::DoubleDouble,
             refine_steps: 4,
+            strategy: Strategy::FullStep,
+            full_steps: 0,
         }
     }
 }
 
 impl NewtonOptions {
-    /// Newton with a line search and nothing else.
+    /// Newton with a line search and nothing else (loads ramped).
     pub fn plain() -> Self {
         Self {
             fallback: false,
             refine_steps: 0,
+            strategy: Strategy::Ramp,
             ..Self::default()
         }
     }
@@ -633,7 +675,8 @@ pub fn newton_linearized(
             break;
         }
         // stagnation: three Newton steps with ≤ 0.1 % energy drop and no tenfold residual drop
-        if let (Mode::Newton, true) = (&mode, history.len() >= 3) {
+        // (not while full steps are taken: the energy may rise there by design)
+        if let (Mode::Newton, true) = (&mode, history.len() >= 3 && it >= opts.full_steps) {
             let (e0, r0) = history[history.len() - 3];
             if e0 - energy <= 1e-3 * e0.abs() && gnorm > 0.1 * r0 && opts.fallback {
                 report.fallbacks.stagnation += 1;
@@ -685,7 +728,12 @@ pub fn newton_linearized(
         // backtracking (Armijo) line search on the energy
         let mut accepted = None;
         let mut alpha = 1.0;
-        if descent {
+        if descent && it < opts.full_steps && matches!(mode, Mode::Newton) {
+            trial.copy_from_slice(x);
+            system.step(&mut trial, &d, 1.0);
+            accepted = model.energy(&trial).ok().filter(|e| e.is_finite());
+        }
+        if descent && accepted.is_none() {
             for _ in 0..40 {
                 trial.copy_from_slice(x);
                 system.step(&mut trial, &d, alpha);
@@ -836,7 +884,8 @@ pub struct ContinuationReport {
 /// `max_step`); it doubles after an easy solve (≤ 12 Newton iterations), up to `max_step`, and
 /// halves after a failed one. Each solve starts from the secant
 /// prediction through the last two equilibria. On failure returns the load factor reached for
-/// and the error.
+/// and the error. With [`Strategy::FullStep`] (and `max_step` 1) the whole load is tried first
+/// by full-step Newton; its iterations count in the report whether it is kept or not.
 pub fn continuation(
     model: &mut ShellModel,
     system: &FreeSystem,
@@ -851,6 +900,26 @@ pub fn continuation(
     };
     let (mut factor, mut step) = (0.0f64, 0.125f64.min(max_step));
     let mut report = ContinuationReport::default();
+    if solver.strategy == Strategy::FullStep && max_step >= 1.0 {
+        apply(model, 1.0, x);
+        let mut trial = x.clone();
+        let full = NewtonOptions {
+            max_iterations: FULL_STEP_ITERATIONS,
+            full_steps: FULL_STEP_ITERATIONS,
+            ..*solver
+        };
+        match newton(model, system, &mut trial, &full) {
+            Ok(r) if r.stable => {
+                *x = trial;
+                report.steps = 1;
+                report.iterations = r.iterations;
+                report.last = r;
+                return Ok(report);
+            }
+            Ok(r) => report.iterations += r.iterations,
+            Err(_) => report.iterations += FULL_STEP_ITERATIONS,
+        }
+    }
     let mut previous: Option<(f64, Vec<Vec3>)> = None;
     while factor < 1.0 {
         let target = (factor + step).min(1.0);

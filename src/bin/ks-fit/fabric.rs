@@ -6,6 +6,9 @@ use kshell::io::{cell, num};
 use kshell::material::load_material;
 use std::path::{Path, PathBuf};
 
+/// Highest degree of an η the fit accepts (each degree adds two parameters per direction).
+const MAX_DEGREE: usize = 8;
+
 /// The fit's settings from its flags, checked.
 #[allow(clippy::too_many_arguments)]
 pub fn fit_options(
@@ -27,6 +30,11 @@ pub fn fit_options(
     }
     if max_degree == 0 || fixed_degree == Some(0) {
         return Err("degrees start at 1 (--max-degree, --degree)".into());
+    }
+    if max_degree > MAX_DEGREE || fixed_degree.is_some_and(|d| d > MAX_DEGREE) {
+        return Err(format!(
+            "degrees go up to {MAX_DEGREE} (--max-degree, --degree; the paper needed at most 5)"
+        ));
     }
     if !(0.0..=15.0).contains(&max_misalign) {
         return Err(format!(

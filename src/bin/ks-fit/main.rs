@@ -222,17 +222,26 @@ struct SceneArgs {
     /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
     #[arg(long)]
     plain_newton: bool,
+    /// How a cantilever's weight is brought on: `full-step` (the whole load by full-step
+    /// Newton first, the ramp if that fails) or `ramp` (load steps from 1/8, each solve
+    /// line-searched).
+    #[arg(long, default_value = "full-step")]
+    strategy: kshell::solve::Strategy,
 }
 
 impl SceneArgs {
     fn solver(&self) -> NewtonOptions {
-        if self.plain_newton {
+        let base = if self.plain_newton {
             NewtonOptions::plain()
         } else {
             NewtonOptions {
                 precision: self.precision,
                 ..NewtonOptions::default()
             }
+        };
+        NewtonOptions {
+            strategy: self.strategy,
+            ..base
         }
     }
 }
