@@ -54,6 +54,13 @@ pub fn methods() -> Vec<Method> {
             name: "full, rug-113 refinement",
             options: full(Precision::Rug(113)),
         },
+        Method {
+            name: "non-monotone: 25 full steps, then full (dd)",
+            options: NewtonOptions {
+                full_steps: crate::solve::FULL_STEP_ITERATIONS,
+                ..full(Precision::DoubleDouble)
+            },
+        },
     ]
 }
 
