@@ -154,3 +154,55 @@ fn datasets_without_warp_or_weft_are_refused() {
     assert_eq!(rc, 2);
     assert!(err.contains("missing.toml"), "{err}");
 }
+
+/// Strips and bends of a stage are solved concurrently; the result must not depend on how many
+/// threads there are: the fitted material, every error and every count, bit for bit.
+#[test]
+fn the_fit_is_the_same_on_one_thread_and_on_several() {
+    let dir = folder("fit-threads");
+    let material = dir.join("degree2.toml");
+    std::fs::write(&material, DEGREE2).unwrap();
+    let data = dir.join("data");
+    let (rc, out, err) = ks_fit(&[
+        "synth",
+        "--material",
+        s(&material),
+        "--out",
+        s(&data),
+        "--points",
+        "5",
+        "--mesh",
+        "8x12",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    let run = |threads: &str| {
+        let fitted = dir.join(format!("fit-{threads}.toml"));
+        let (rc, out, err) = common::ks_fit_env(
+            &[
+                "fit",
+                s(&data.join("fabric.toml")),
+                "-o",
+                s(&fitted),
+                "--mesh-ladder",
+                "8x12",
+                "--max-degree",
+                "1",
+                "--protocol",
+                "paper",
+                "--quiet",
+            ],
+            &[("RAYON_NUM_THREADS", threads)],
+        );
+        assert_eq!(rc, 0, "{out}{err}");
+        // everything but the clock
+        std::fs::read_to_string(&fitted)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("wall_seconds") && !l.starts_with('"'))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    let (one, several) = (run("1"), run("3"));
+    assert!(one.contains("a11_pa") && one.contains("[[fit.test]]"));
+    assert_eq!(one, several);
+}
