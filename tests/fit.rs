@@ -25,13 +25,12 @@ mu = [0.7, 0.3]
 alpha = [1.0, 300.0]
 ";
 
-#[test]
-fn noise_free_degree2_data_are_fitted_back() {
-    let dir = folder("fit-degree2");
+/// A noise-free dataset of `DEGREE2` written by `ks-fit synth` into `dir/data` with `points`
+/// per curve, on the fit's own first mesh (so that a perfect fit exists).
+fn synth_degree2(dir: &std::path::Path, points: &str) -> std::path::PathBuf {
     let material = dir.join("degree2.toml");
     std::fs::write(&material, DEGREE2).unwrap();
     let data = dir.join("data");
-    // the virtual lab on the fit's own mesh, so that a perfect fit exists
     let (rc, out, err) = ks_fit(&[
         "synth",
         "--material",
@@ -39,11 +38,18 @@ fn noise_free_degree2_data_are_fitted_back() {
         "--out",
         s(&data),
         "--points",
-        "6",
+        points,
         "--mesh",
         "8x12",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
+    data
+}
+
+#[test]
+fn noise_free_degree2_data_are_fitted_back() {
+    let dir = folder("fit-degree2");
+    let data = synth_degree2(&dir, "6");
     // start the thickness 25 % off: the bend tests must bring it back
     let fabric = data.join("fabric.toml");
     let text = std::fs::read_to_string(&fabric).unwrap();
@@ -160,21 +166,7 @@ fn datasets_without_warp_or_weft_are_refused() {
 #[test]
 fn the_fit_is_the_same_on_one_thread_and_on_several() {
     let dir = folder("fit-threads");
-    let material = dir.join("degree2.toml");
-    std::fs::write(&material, DEGREE2).unwrap();
-    let data = dir.join("data");
-    let (rc, out, err) = ks_fit(&[
-        "synth",
-        "--material",
-        s(&material),
-        "--out",
-        s(&data),
-        "--points",
-        "5",
-        "--mesh",
-        "8x12",
-    ]);
-    assert_eq!(rc, 0, "{out}{err}");
+    let data = synth_degree2(&dir, "5");
     let run = |threads: &str| {
         let fitted = dir.join(format!("fit-{threads}.toml"));
         let (rc, out, err) = common::ks_fit_env(

@@ -7,16 +7,7 @@ use std::process::Command;
 
 /// Runs `ks-fit` in the crate root: (exit code, stdout, stderr).
 pub fn ks_fit(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ks-fit"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run ks-fit");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
+    ks_fit_env(args, &[])
 }
 
 /// A fresh, empty temporary folder named after the test process and `tag`.
