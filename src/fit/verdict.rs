@@ -36,7 +36,8 @@ pub struct Judgement {
     /// the error judged (see the module doc), `None` for a test without one
     pub error: Option<f64>,
     /// `T3` within the paper's Table 3 bound (tensile), `ok` within `--max-error`, `OVER` a
-    /// fitted test above it, `high` a validation test above it, `-` nothing to judge
+    /// fitted test above it, `high` a test not fitted (validation, or a repeat left out) above
+    /// it, `-` nothing to judge
     pub mark: &'static str,
 }
 
@@ -132,7 +133,10 @@ pub fn verdict(r: &FitResult, max_error: f64) -> Verdict {
         .iter()
         .filter(|(t, j)| t.used_in_fit && t.drape_angle_deg.is_none() && j.error.is_some())
         .count();
-    let in_t3 = pairs.iter().filter(|(_, j)| j.mark == "T3").count();
+    let in_t3 = pairs
+        .iter()
+        .filter(|(t, j)| t.used_in_fit && j.mark == "T3")
+        .count();
     let high: Vec<String> = pairs
         .iter()
         .filter(|(_, j)| j.mark == "high")
@@ -151,8 +155,9 @@ pub fn verdict(r: &FitResult, max_error: f64) -> Verdict {
         )
     };
     if !high.is_empty() {
+        // validation runs, and repeats left out of the fit (`--repeat largest`)
         line.push_str(&format!(
-            "; validation above {pct} % (predicted, not fitted): {}",
+            "; not fitted and above {pct} % (predictions, not failures): {}",
             high.join(", ")
         ));
     }
@@ -241,5 +246,11 @@ mod tests {
         let r = result(vec![strip(90.0, 0.02, 1.0, 0.02), t]);
         assert_eq!(judge(&r, 0.1)[1].mark, "high");
         assert!(verdict(&r, 0.1).passed());
+        // a repeat left out of the fit (--repeat largest) is neither a failure nor in the tally
+        let mut left_out = strip(90.0, 0.02, 1.0, 0.02);
+        left_out.used_in_fit = false;
+        let r = result(vec![strip(90.0, 0.02, 1.0, 0.02), left_out]);
+        let v = verdict(&r, 0.1);
+        assert!(v.line.contains("1 of 1 fitted strips"), "{}", v.line);
     }
 }
