@@ -1,0 +1,459 @@
+//! The scene commands of `ks-fit`: `tensile` (a virtual ASTM D5035 strip), `bend` (a virtual
+//! ASTM D1388 cantilever) and `converge` (a mesh-refinement study of either), with the checks
+//! of their flags (lengths, angles, steps) made before anything is built.
+
+use crate::guard;
+use crate::parse_mesh;
+use clap::Subcommand;
+use kshell::material::load_material;
+use kshell::scene::{CantileverBend, TensileStrip};
+use kshell::solve::{NewtonOptions, Precision};
+use kshell::subdiv::BoundaryRule;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Options shared by the scene commands.
+#[derive(clap::Args)]
+pub struct SceneArgs {
+    /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip,
+    /// elements of about 6.25 mm for a cantilever).
+    #[arg(long, value_parser = parse_mesh)]
+    mesh: Option<(usize, usize)>,
+    /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
+    /// ghost for cantilevers, as measured in the README).
+    #[arg(long)]
+    boundary: Option<BoundaryRule>,
+    /// Report each solve on stderr.
+    #[arg(short, long)]
+    verbose: bool,
+    /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
+    #[arg(long, default_value = "dd")]
+    precision: Precision,
+    /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
+    #[arg(long)]
+    plain_newton: bool,
+    /// How a cantilever's weight is brought on: `full-step` (the whole load by full-step
+    /// Newton first, the ramp if that fails) or `ramp` (load steps from 1/8, each solve
+    /// line-searched).
+    #[arg(long, default_value = "full-step")]
+    strategy: kshell::solve::Strategy,
+}
+
+impl SceneArgs {
+    fn solver(&self) -> NewtonOptions {
+        let base = if self.plain_newton {
+            NewtonOptions::plain()
+        } else {
+            NewtonOptions {
+                precision: self.precision,
+                ..NewtonOptions::default()
+            }
+        };
+        NewtonOptions {
+            strategy: self.strategy,
+            ..base
+        }
+    }
+}
+
+#[derive(Subcommand)]
+pub enum ConvergeScene {
+    /// QoI: the clamp force at the given elongation.
+    Tensile {
+        #[arg(long)]
+        material: PathBuf,
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Strip width, mm.
+        #[arg(long, allow_negative_numbers = true)]
+        width: f64,
+        /// Gauge length, mm.
+        #[arg(long, allow_negative_numbers = true)]
+        length: f64,
+        /// Elongation at which the force is compared, mm.
+        #[arg(long, allow_negative_numbers = true)]
+        elongation: f64,
+        #[command(flatten)]
+        study: StudyArgs,
+    },
+    /// QoI: the drape angle.
+    Bend {
+        #[arg(long)]
+        material: PathBuf,
+        #[arg(long, allow_negative_numbers = true)]
+        angle: f64,
+        /// Overhang, mm.
+        #[arg(long, allow_negative_numbers = true)]
+        overhang: f64,
+        /// Strip width, mm.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
+        width: f64,
+        #[command(flatten)]
+        study: StudyArgs,
+    },
+}
+
+#[derive(clap::Args)]
+pub struct StudyArgs {
+    /// Number of meshes in the default ladder (4×6, 8×12, … scaled to the aspect ratio).
+    #[arg(long, default_value_t = 5)]
+    levels: usize,
+    /// Explicit ladder, e.g. 4x6,8x12,16x24 (each twice as fine as the last).
+    #[arg(long)]
+    mesh_ladder: Option<String>,
+    /// Also name the coarsest mesh whose estimated relative error is below this.
+    #[arg(long)]
+    tol: Option<f64>,
+    /// Write the table as CSV.
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Write an SVG chart of error against DOFs and against time.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Boundary treatment of the limit surface: phantom or ghost (default: the scene's own).
+    #[arg(long)]
+    boundary: Option<BoundaryRule>,
+}
+
+/// One line describing a solve, for --verbose.
+fn describe(r: &kshell::solve::SolveReport) -> String {
+    format!(
+        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {:.1} ms",
+        r.iterations,
+        r.backward_euler_steps,
+        r.fallbacks.indefinite,
+        r.fallbacks.ascent,
+        r.fallbacks.stagnation,
+        r.fallbacks.short_step,
+        r.refinement_steps,
+        r.precision,
+        r.residual,
+        if r.precision_limited { " (round-off floor)" } else { "" },
+        if r.saddle_escapes > 0 { format!(", {} saddle escapes", r.saddle_escapes) } else { String::new() },
+        r.seconds * 1e3
+    )
+}
+
+/// Lengths the scene commands accept, mm: a strip from 0.1 mm (a yarn) to a 2 m sheet.
+const MM_RANGE: (f64, f64) = (0.1, 2000.0);
+
+/// Most elongation steps of `tensile` (each one an equilibrium solve).
+const MAX_STEPS: usize = 10_000;
+
+/// A positive number of millimetres up to the top of [`MM_RANGE`], in metres; a strip's
+/// dimensions (not an elongation) are also at least its bottom.
+fn mm(name: &str, v: f64) -> Result<f64, String> {
+    let is_elongation = name == "to" || name == "elongation";
+    if !(v.is_finite() && v > 0.0 && v <= MM_RANGE.1) {
+        return Err(format!(
+            "--{name} must be a positive number of millimetres up to {}, got {v:?}",
+            MM_RANGE.1
+        ));
+    }
+    if !is_elongation && v < MM_RANGE.0 {
+        return Err(format!(
+            "--{name} must be at least {} mm, got {v:?}",
+            MM_RANGE.0
+        ));
+    }
+    Ok(v * 1e-3)
+}
+
+/// A cut angle in [-360, 360] degrees.
+fn angle_deg(v: f64) -> Result<f64, String> {
+    if v.is_finite() && v.abs() <= 360.0 {
+        Ok(v)
+    } else {
+        Err(format!("--angle must be in [-360, 360] degrees, got {v:?}"))
+    }
+}
+
+pub fn cmd_tensile(
+    material: &std::path::Path,
+    angle: f64,
+    width: f64,
+    length: f64,
+    to: f64,
+    steps: usize,
+    args: &SceneArgs,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
+    let angle = angle_deg(angle)?;
+    if to > 2.0 * l {
+        return Err(format!(
+            "--to {} mm is more than twice the gauge length (200 % strain)",
+            to * 1e3
+        ));
+    }
+    if !(1..=MAX_STEPS).contains(&steps) {
+        return Err(format!("--steps must be in [1, {MAX_STEPS}], got {steps}"));
+    }
+    let mut strip = TensileStrip::new(w, l, angle);
+    if let Some(m) = args.mesh {
+        strip.mesh = m;
+    }
+    if let Some(b) = args.boundary {
+        strip.boundary = b;
+    }
+    strip.solver = args.solver();
+    // the mesh, and every step's equilibrium the strip keeps (3 doubles a node), within limits
+    let (nx, ny) = strip.mesh;
+    let kept = steps.saturating_mul((nx + 3) * (ny + 3) * 24) / kshell::limits::BYTES_PER_FACE;
+    kshell::limits::check_faces(
+        &format!("--mesh {nx}x{ny} with {steps} steps"),
+        nx.saturating_mul(ny).saturating_add(kept),
+    )?;
+    let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
+    let mut rig = strip.rig(&mat, &dl).map_err(|e| e.to_string())?;
+    println!("elongation_mm,force_n");
+    let (start, mut shown) = (Instant::now(), 0.0);
+    let mut each = |p: &kshell::scene::TensilePoint| {
+        println!(
+            "{},{}",
+            kshell::io::num(p.elongation * 1e3),
+            kshell::io::num(p.force)
+        );
+        if args.verbose {
+            eprintln!(
+                "elongation {:.4} mm: {}",
+                p.elongation * 1e3,
+                describe(&p.report)
+            );
+        }
+        // a long curve says how far it has come every few seconds
+        let t = start.elapsed().as_secs_f64();
+        if t - shown > 5.0 {
+            shown = t;
+            eprintln!(
+                "ks-fit: tensile: {:.4} of {:.4} mm after {t:.0} s",
+                p.elongation * 1e3,
+                to * 1e3
+            );
+        }
+    };
+    rig.run_each(false, &mut each).map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+pub fn cmd_bend(
+    material: &std::path::Path,
+    angle: f64,
+    overhang: f64,
+    width: f64,
+    args: &SceneArgs,
+) -> Result<(), String> {
+    let mat = load_material(material).map_err(|e| e.to_string())?;
+    let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
+    let angle = angle_deg(angle)?;
+    let mut bend = CantileverBend::new(w, l, angle);
+    if let Some(m) = args.mesh {
+        if m.1 < 2 {
+            return Err("--mesh: a cantilever needs at least 2 faces along".into());
+        }
+        bend.mesh = m;
+    }
+    if let Some(b) = args.boundary {
+        bend.boundary = b;
+    }
+    bend.solver = args.solver();
+    let r = bend.run(&mat).map_err(|e| e.to_string())?;
+    if args.verbose {
+        eprintln!(
+            "{} load steps, {} iterations in all; last solve: {}",
+            r.load_steps,
+            r.iterations,
+            describe(&r.report)
+        );
+    }
+    println!("overhang_mm,drape_angle_deg");
+    println!("{},{}", overhang, r.drape_angle_deg);
+    Ok(())
+}
+
+pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
+    use kshell::converge::{default_ladder, parse_ladder, study};
+    let (study_args, aspect, title) = match &scene {
+        ConvergeScene::Tensile {
+            study,
+            width,
+            length,
+            angle,
+            elongation,
+            ..
+        } => (
+            study,
+            length / width,
+            format!("tensile {angle}°, {width} x {length} mm, force at {elongation} mm"),
+        ),
+        ConvergeScene::Bend {
+            study,
+            width,
+            overhang,
+            angle,
+            ..
+        } => (
+            study,
+            overhang / width,
+            format!("cantilever {angle}°, {width} mm wide, overhang {overhang} mm"),
+        ),
+    };
+    match &scene {
+        ConvergeScene::Tensile {
+            angle,
+            width,
+            length,
+            elongation,
+            ..
+        } => {
+            let (_, l, e) = (
+                mm("width", *width)?,
+                mm("length", *length)?,
+                mm("elongation", *elongation)?,
+            );
+            angle_deg(*angle)?;
+            if e > 2.0 * l {
+                return Err(
+                    "--elongation is more than twice the gauge length (200 % strain)".into(),
+                );
+            }
+        }
+        ConvergeScene::Bend {
+            angle,
+            overhang,
+            width,
+            ..
+        } => {
+            mm("width", *width)?;
+            mm("overhang", *overhang)?;
+            angle_deg(*angle)?;
+        }
+    }
+    let ladder = match &study_args.mesh_ladder {
+        Some(l) => parse_ladder(l).map_err(|e| format!("--mesh-ladder: {e}"))?,
+        None => {
+            if !(1..=kshell::converge::MAX_LEVELS).contains(&study_args.levels) {
+                return Err(format!(
+                    "--levels must be in [1, {}], got {}",
+                    kshell::converge::MAX_LEVELS,
+                    study_args.levels
+                ));
+            }
+            default_ladder(aspect, study_args.levels)
+        }
+    };
+    let flag = if study_args.mesh_ladder.is_some() {
+        "--mesh-ladder"
+    } else {
+        "--levels"
+    };
+    kshell::converge::check_ladder(&ladder, true).map_err(|e| format!("{flag}: {e}"))?;
+    if let Some(t) = study_args.tol {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(format!("--tol must be a positive number, got {t:?}"));
+        }
+    }
+    let mut guard = guard::Guard::new(force);
+    guard.input(match &scene {
+        ConvergeScene::Tensile { material, .. } | ConvergeScene::Bend { material, .. } => material,
+    });
+    if let Some(p) = &study_args.csv {
+        guard.file("--csv", p)?;
+    }
+    if let Some(p) = &study_args.plot {
+        guard.file("--plot", p)?;
+    }
+    let dofs = |(nx, ny): (usize, usize), rule: BoundaryRule| match rule {
+        BoundaryRule::Phantom => 3 * (nx + 1) * (ny + 1),
+        BoundaryRule::Ghost => 3 * (nx + 3) * (ny + 3),
+    };
+    let progress = |l: &kshell::converge::Level| {
+        eprintln!(
+            "ks-fit: {}x{} done: qoi {:.12e} in {:.2} s",
+            l.mesh.0, l.mesh.1, l.qoi, l.seconds
+        )
+    };
+    let result = match &scene {
+        ConvergeScene::Tensile {
+            material,
+            angle,
+            width,
+            length,
+            elongation,
+            study: a,
+        } => {
+            let mat = load_material(material).map_err(|e| e.to_string())?;
+            let (w, l, e) = (
+                mm("width", *width)?,
+                mm("length", *length)?,
+                mm("elongation", *elongation)?,
+            );
+            // steps of at most 5 % strain
+            let n = ((e / l) / 0.05).ceil().max(1.0) as usize;
+            let dl: Vec<f64> = (1..=n).map(|i| e * i as f64 / n as f64).collect();
+            study(
+                &ladder,
+                |mesh| {
+                    let mut strip = TensileStrip::new(w, l, *angle);
+                    strip.mesh = mesh;
+                    if let Some(b) = a.boundary {
+                        strip.boundary = b;
+                    }
+                    let curve = strip
+                        .run(&mat, &dl)
+                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
+                    Ok::<_, String>((
+                        curve.last().map(|p| p.force).unwrap_or(0.0),
+                        dofs(mesh, strip.boundary),
+                    ))
+                },
+                progress,
+            )?
+        }
+        ConvergeScene::Bend {
+            material,
+            angle,
+            overhang,
+            width,
+            study: a,
+        } => {
+            let mat = load_material(material).map_err(|e| e.to_string())?;
+            let (w, l) = (mm("width", *width)?, mm("overhang", *overhang)?);
+            study(
+                &ladder,
+                |mesh| {
+                    let mut bend = CantileverBend::new(w, l, *angle);
+                    bend.mesh = (mesh.0, mesh.1.max(2));
+                    if let Some(b) = a.boundary {
+                        bend.boundary = b;
+                    }
+                    let r = bend
+                        .run(&mat)
+                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
+                    Ok::<_, String>((r.drape_angle_deg, dofs(bend.mesh, bend.boundary)))
+                },
+                progress,
+            )?
+        }
+    };
+    print!("{}", result.table());
+    if let Some(t) = study_args.tol {
+        match result.pick(t) {
+            Some(l) => println!(
+                "coarsest mesh with estimated error below {t:e}: {}x{} ({} DOFs, {:.2} s)",
+                l.mesh.0, l.mesh.1, l.dofs, l.seconds
+            ),
+            None => println!("no mesh of this ladder has an estimated error below {t:e}"),
+        }
+    }
+    if let Some(p) = &study_args.csv {
+        kshell::io::write_atomic(p, result.csv())
+            .map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+    }
+    if let Some(p) = &study_args.plot {
+        let svg = result.svg(&title)?;
+        kshell::io::write_atomic(p, svg)
+            .map_err(|e| format!("{}: cannot write: {e}", p.display()))?;
+    }
+    Ok(())
+}
