@@ -203,3 +203,48 @@ fn planar_arc_loses_out_of_plane_stability_near_the_full_circle() {
     assert_eq!(sze_rollup((2, 32), 0.9, true).2, Some(true));
     assert_eq!(sze_rollup((2, 32), 0.95, true).2, Some(false));
 }
+
+/// Every strategy of the solver reaches the same equilibrium of the heavy cantilever (the
+/// drape angle agrees to 1e-8°), and the default one, the whole weight by full-step Newton,
+/// takes at most 25 Newton iterations at 4×16 (the solver issue's target; 15 measured).
+#[test]
+fn every_strategy_finds_the_same_heavy_cantilever() {
+    use kshell::solve::{NewtonOptions, Strategy};
+    let (a11, tau, rho) = (2.0e7, 2.0e-4, 0.1);
+    let m = FabricMaterial {
+        name: "heavy".into(),
+        areal_density: rho,
+        thickness: tau,
+        law: OrthotropicStvk {
+            a11,
+            a22: a11,
+            a12: 0.0,
+            g12: 1.0e7,
+        }
+        .into(),
+    };
+    let mut angles = Vec::new();
+    for (name, strategy) in Strategy::ALL {
+        let mut bend = CantileverBend::new(0.025, 0.0477207, 90.0);
+        bend.mesh = (4, 16);
+        bend.solver = NewtonOptions {
+            strategy,
+            ..NewtonOptions::default()
+        };
+        let r = bend.run(&m).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(r.report.stable, "{name}: not a stable equilibrium");
+        if strategy == Strategy::default() {
+            assert!(r.iterations <= 25, "{name}: {} iterations", r.iterations);
+        }
+        angles.push((name, r.drape_angle_deg));
+    }
+    for (name, a) in &angles {
+        assert!(
+            (a - angles[0].1).abs() < 1e-8,
+            "{name}: {a} against {}",
+            angles[0].1
+        );
+    }
+    // and the angle is the elastica's (41.4873°, see HEAVY_ELASTICA_ANGLE) to the 4×16 mesh error
+    assert!((angles[0].1 - HEAVY_ELASTICA_ANGLE).abs() < 0.1);
+}

@@ -809,6 +809,8 @@ pub struct BendResult {
     pub load_steps: usize,
     /// Newton iterations over all load steps (failed attempts included).
     pub iterations: usize,
+    /// Numeric factorisations over all load steps (failed attempts included).
+    pub factorizations: usize,
     pub report: SolveReport,
     /// For an in-plane solve ([`CantileverBend::in_plane`]): whether the end state is also
     /// stable once the x coordinates are let go (false: a saddle of the 3-D problem).
@@ -934,6 +936,7 @@ impl CantileverBend {
             ContinuationReport {
                 steps: 1,
                 iterations: last.iterations,
+                factorizations: last.factorizations,
                 last,
             }
         };
@@ -967,6 +970,7 @@ impl CantileverBend {
             tip,
             load_steps: cont.steps,
             iterations: cont.iterations,
+            factorizations: cont.factorizations,
             report: cont.last,
             stable_out_of_plane,
         })

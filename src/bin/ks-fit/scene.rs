@@ -33,8 +33,9 @@ pub struct SceneArgs {
     #[arg(long)]
     plain_newton: bool,
     /// How a cantilever's weight is brought on: `full-step` (the whole load by full-step
-    /// Newton first, the ramp if that fails) or `ramp` (load steps from 1/8, each solve
-    /// line-searched).
+    /// Newton first, the ramp if that fails), `ramp` (load steps from 1/8, each solve
+    /// line-searched), `trust-region` (every solve by trust-region Newton, the whole load
+    /// first) or `adaptive` (load steps sized from the predictor's error).
     #[arg(long, default_value = "full-step")]
     strategy: kshell::solve::Strategy,
 }

@@ -1,0 +1,226 @@
+//! The hard problems of the atlas, and running one with one method.
+
+use super::{table, Method, Row};
+use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};
+use crate::scene::{CantileverBend, SceneError, TensileStrip};
+use crate::solve::SolveReport;
+use std::time::Instant;
+
+/// One hard problem.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Case {
+    /// 45° strip of a stiffening law (degree 3), pulled to 30 % strain in three steps.
+    BiasStiffening30,
+    /// 90 mm cantilever of a stiff law (a11 = 1e8 Pa, τ = 0.2 mm), its whole weight brought on
+    /// as the strategy chooses.
+    CantileverFullGravity,
+    /// The heavy ASTM D1388 cantilever (25 × 47.7207 mm, τ = 0.2 mm, a11 = a22 = 2e7 Pa,
+    /// 100 g/m²: overhang twice the bending length, chord angle 41.4873°).
+    HeavyD1388,
+    /// τ = 0.05 mm, a11 = 1e9 Pa and a11 / G12 = 10^`exponent`, bias strip to 5 % in one step:
+    /// the strip wrinkles.
+    SoftShear { exponent: u8 },
+    /// Warp strip of the stiffening law pushed 2 % shorter in two steps: it buckles out of
+    /// its plane (the flat state is a saddle).
+    Compression,
+    /// Warp strip to 20 % whose strain crosses the 5 % cut-off during the solve.
+    CutoffCrossing,
+}
+
+impl Case {
+    pub fn all() -> Vec<Case> {
+        vec![
+            Case::BiasStiffening30,
+            Case::CantileverFullGravity,
+            Case::HeavyD1388,
+            Case::SoftShear { exponent: 4 },
+            Case::SoftShear { exponent: 5 },
+            Case::SoftShear { exponent: 6 },
+            Case::Compression,
+            Case::CutoffCrossing,
+        ]
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            Case::BiasStiffening30 => "bias strip, degree-3 stiffening law, to 30 %".into(),
+            Case::CantileverFullGravity => "cantilever 90 mm, stiff law, full gravity".into(),
+            Case::HeavyD1388 => "heavy D1388 cantilever (overhang 2c)".into(),
+            Case::SoftShear { exponent } => {
+                format!("thin (0.05 mm), a11/G12 = 1e{exponent}, bias to 5 %")
+            }
+            Case::Compression => "warp strip compressed 2 % (buckles)".into(),
+            Case::CutoffCrossing => "warp strip crossing its 5 % cut-off, to 20 %".into(),
+        }
+    }
+
+    /// A short label for charts.
+    pub fn label(&self) -> String {
+        match self {
+            Case::BiasStiffening30 => "bias 30 %".into(),
+            Case::CantileverFullGravity => "cantilever".into(),
+            Case::HeavyD1388 => "D1388 heavy".into(),
+            Case::SoftShear { exponent } => format!("G12 1e-{exponent}"),
+            Case::Compression => "compression".into(),
+            Case::CutoffCrossing => "cut-off".into(),
+        }
+    }
+
+    /// Runs this case with one method; `reduced` uses coarse meshes (for CI).
+    pub fn run(&self, method: &Method, reduced: bool) -> Row {
+        let t0 = Instant::now();
+        let mut row = Row {
+            case: *self,
+            method: method.name,
+            converged: false,
+            residual: f64::NAN,
+            iterations: 0,
+            factorizations: 0,
+            load_steps: 0,
+            backward_euler_steps: 0,
+            refinement_steps: 0,
+            stable: false,
+            saddle_escapes: 0,
+            seconds: 0.0,
+            note: String::new(),
+        };
+        let mut fallbacks = Vec::new();
+        let outcome = match self {
+            Case::CantileverFullGravity | Case::HeavyD1388 => {
+                self.cantilever(method, reduced, &mut row, &mut fallbacks)
+            }
+            _ => self.strip(method, reduced, &mut row, &mut fallbacks),
+        };
+        row.seconds = t0.elapsed().as_secs_f64();
+        match outcome {
+            Ok(()) => {
+                row.converged = true;
+                row.note = table::what_happened(&row, &fallbacks);
+            }
+            Err(e) => row.note = table::explain(&e),
+        }
+        row
+    }
+
+    fn strip(
+        &self,
+        method: &Method,
+        reduced: bool,
+        row: &mut Row,
+        fallbacks: &mut Vec<SolveReport>,
+    ) -> Result<(), SceneError> {
+        let (material, angle, strains): (FabricMaterial, f64, Vec<f64>) = match *self {
+            Case::BiasStiffening30 => (stiffening(), 45.0, vec![0.1, 0.2, 0.3]),
+            Case::SoftShear { exponent } => {
+                let mut m = stiffening();
+                m.thickness = 5.0e-5;
+                m.law = Orthotropic::from(OrthotropicStvk {
+                    a11: 1.0e9,
+                    a22: 1.0e8,
+                    a12: 1.0e7,
+                    g12: 1.0e9 / 10f64.powi(exponent as i32),
+                });
+                (m, 45.0, vec![0.05])
+            }
+            Case::Compression => (stiffening(), 90.0, vec![-0.01, -0.02]),
+            _ => {
+                let mut m = stiffening();
+                m.law.cutoffs = Cutoffs {
+                    e11: (0.0, 0.05),
+                    e22: (0.0, 0.05),
+                    e12: (-0.05, 0.05),
+                };
+                (m, 90.0, vec![0.2])
+            }
+        };
+        let mut strip = TensileStrip::new(0.05, 0.075, angle);
+        strip.mesh = if reduced { (4, 6) } else { (16, 24) };
+        strip.solver = method.options;
+        let dl: Vec<f64> = strains.iter().map(|s| s * 0.075).collect();
+        let curve = strip.run(&material, &dl)?;
+        row.load_steps = curve.len();
+        for p in curve {
+            absorb(row, &p.report);
+            fallbacks.push(p.report);
+        }
+        Ok(())
+    }
+
+    fn cantilever(
+        &self,
+        method: &Method,
+        reduced: bool,
+        row: &mut Row,
+        fallbacks: &mut Vec<SolveReport>,
+    ) -> Result<(), SceneError> {
+        let (m, mut bend) = if *self == Case::HeavyD1388 {
+            let m = FabricMaterial {
+                name: "heavy".into(),
+                areal_density: 0.1,
+                thickness: 2.0e-4,
+                law: Orthotropic::from(OrthotropicStvk {
+                    a11: 2.0e7,
+                    a22: 2.0e7,
+                    a12: 0.0,
+                    g12: 1.0e7,
+                }),
+            };
+            let mut bend = CantileverBend::new(0.025, 0.0477207, 90.0);
+            bend.mesh = if reduced { (4, 8) } else { (4, 16) };
+            (m, bend)
+        } else {
+            let mut m = stiffening();
+            m.law = Orthotropic::from(OrthotropicStvk {
+                a11: 1.0e8,
+                a22: 6.0e7,
+                a12: 0.0,
+                g12: 1.5e6,
+            });
+            let mut bend = CantileverBend::new(0.025, 0.09, 90.0);
+            bend.mesh = if reduced { (4, 12) } else { (4, 32) };
+            (m, bend)
+        };
+        bend.solver = method.options;
+        let r = bend.run(&m)?;
+        absorb(row, &r.report);
+        // the continuation's totals over every load step and failed attempt
+        row.iterations = r.iterations;
+        row.factorizations = r.factorizations;
+        row.load_steps = r.load_steps;
+        fallbacks.push(r.report);
+        Ok(())
+    }
+}
+
+/// Adds one solve's counts to a row.
+fn absorb(row: &mut Row, r: &SolveReport) {
+    row.residual = r.residual;
+    row.iterations += r.iterations;
+    row.factorizations += r.factorizations;
+    row.backward_euler_steps += r.backward_euler_steps;
+    row.refinement_steps += r.refinement_steps;
+    row.saddle_escapes += r.saddle_escapes;
+    row.stable = r.stable;
+}
+
+fn stiffening() -> FabricMaterial {
+    let stiff = Eta {
+        mu: vec![0.6, 0.3, 0.1],
+        alpha: vec![1.0, 6.0, 14.0],
+    };
+    FabricMaterial {
+        name: "stiffening".into(),
+        areal_density: 0.15,
+        thickness: 2.0e-4,
+        law: Orthotropic {
+            a11: 1.0e8,
+            a22: 6.0e7,
+            a12: 1.0e7,
+            g12: 1.5e6,
+            warp: stiff.clone(),
+            weft: stiff.clone(),
+            shear: stiff,
+            cutoffs: Cutoffs::none(),
+        },
+    }
+}
