@@ -58,6 +58,10 @@ pub(super) fn what_happened(row: &Row, solves: &[SolveReport]) -> String {
             why.join(", ")
         ));
     }
+    let curvature: usize = solves.iter().map(|r| r.curvature_steps).sum();
+    if curvature > 0 {
+        parts.push(format!("{curvature} negative-curvature steps"));
+    }
     if solves.iter().any(|r| r.trust_region_gave_up) {
         parts.push("trust region gave up, line search finished".into());
     }
@@ -120,17 +124,27 @@ pub fn to_markdown(rows: &[Row]) -> String {
             } else {
                 "–".into()
             },
-            r.iterations,
-            r.factorizations,
-            r.load_steps,
-            r.backward_euler_steps,
-            r.refinement_steps,
-            r.saddle_escapes,
+            count(r, r.iterations),
+            count(r, r.factorizations),
+            count(r, r.load_steps),
+            count(r, r.backward_euler_steps),
+            count(r, r.refinement_steps),
+            count(r, r.saddle_escapes),
             r.seconds,
             r.note.replace('|', "/")
         );
     }
     s
+}
+
+/// A count of a converged row; a failed row's counts are unknown (the failed solve's report is
+/// lost with it), shown as –.
+fn count(r: &Row, n: usize) -> String {
+    if r.converged {
+        n.to_string()
+    } else {
+        "–".into()
+    }
 }
 
 /// Per case: each strategy's iterations as a multiple of the fewest any converged strategy took

@@ -92,6 +92,8 @@ pub struct FitOptions {
     pub max_misalign_deg: f64,
     /// A fitted test whose error exceeds this (mean relative) fails the fit: see [`verdict`].
     pub max_error: f64,
+    /// How every strip and cantilever solve of the fit is globalised and its load brought on.
+    pub strategy: crate::solve::Strategy,
 }
 
 impl Default for FitOptions {
@@ -112,6 +114,7 @@ impl Default for FitOptions {
             repeats: RepeatMode::All,
             toe: ToeMode::Auto,
             max_misalign_deg: 2.0,
+            strategy: crate::solve::Strategy::default(),
             max_error: 0.10,
         }
     }

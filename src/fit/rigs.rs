@@ -54,6 +54,7 @@ impl Fitter<'_> {
         t.solver.max_iterations = 500;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
+        t.solver.strategy = self.opts.strategy;
         let mut rig = t
             .rig(&self.material(), &strip.nodes)
             .map_err(|source| FitError::Scene {

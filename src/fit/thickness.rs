@@ -30,6 +30,7 @@ impl Fitter<'_> {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
             bend.mesh = bend_mesh(level, b);
             bend.solver.rtol = super::FIT_RTOL;
+            bend.solver.strategy = self.opts.strategy;
             let rig = BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
                 stage: format!("setting up the {}° cantilever", b.angle_deg),
                 source,

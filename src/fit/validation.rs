@@ -102,6 +102,7 @@ impl Fitter<'_> {
             t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
             t.solver.max_iterations = 500;
             t.solver.rtol = super::FIT_RTOL;
+            t.solver.strategy = self.opts.strategy;
             let rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,

@@ -16,6 +16,7 @@
 //! the report says so).
 
 mod continuation;
+mod curvature;
 mod linearization;
 mod newton;
 pub mod refine;
@@ -187,6 +188,9 @@ pub struct SolveReport {
     /// Refinement corrections applied over all linear solves, and the precision used.
     pub refinement_steps: usize,
     pub precision: Precision,
+    /// Steps along a direction of negative curvature (see `curvature`), taken where Newton's
+    /// factorisation failed.
+    pub curvature_steps: usize,
     /// Line-search step halvings in total (trust region: rejected steps).
     pub backtracks: usize,
     /// [`Strategy::TrustRegion`] only: the trust region gave up and the line-search solver

@@ -184,7 +184,29 @@ pub(super) fn line_search(
                     report.fallbacks.indefinite += 1;
                     mode = Mode::BackwardEuler;
                     history.clear();
-                    backward_euler_factor(system, &mut values, &mass, &mut mu, &mut report)?
+                    let llt =
+                        backward_euler_factor(system, &mut values, &mass, &mut mu, &mut report)?;
+                    if let Some(v) =
+                        super::curvature::direction(system, &llt, &values, mu, &mass, &mut seed)
+                    {
+                        let moved = super::curvature::search(
+                            model,
+                            system,
+                            x,
+                            &mut trial,
+                            (&v.0, v.1),
+                            &gf,
+                            energy,
+                            &mut report,
+                        );
+                        if moved {
+                            report.factorizations += 1;
+                            report.curvature_steps += 1;
+                            mode = Mode::Newton;
+                            continue;
+                        }
+                    }
+                    llt
                 }
             },
             Mode::BackwardEuler => {
@@ -300,8 +322,8 @@ pub(super) fn line_search(
     })
 }
 
-/// Moves every free DOF by a pseudo-random amount of 1e-6 of the body's size (deterministic).
-pub(super) fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
+/// The diagonal of the bounding box of `x`.
+pub(super) fn size(x: &[Vec3]) -> f64 {
     let (lo, hi) = x
         .iter()
         .fold(([f64::MAX; 3], [f64::MIN; 3]), |(lo, hi), p| {
@@ -310,14 +332,23 @@ pub(super) fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
                 std::array::from_fn(|c| hi[c].max(p[c])),
             )
         });
-    let size = (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt();
-    let mut d = vec![0.0; system.num_free];
-    for v in d.iter_mut() {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        *v = ((*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2e-6 * size;
-    }
+    (0..3).map(|c| (hi[c] - lo[c]).powi(2)).sum::<f64>().sqrt()
+}
+
+/// A pseudo-random number in [−1, 1) (xorshift; deterministic from `seed`).
+pub(super) fn uniform(seed: &mut u64) -> f64 {
+    *seed ^= *seed << 13;
+    *seed ^= *seed >> 7;
+    *seed ^= *seed << 17;
+    ((*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 2.0
+}
+
+/// Moves every free DOF by a pseudo-random amount of 1e-6 of the body's size (deterministic).
+pub(super) fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
+    let size = size(x);
+    let d: Vec<f64> = (0..system.num_free)
+        .map(|_| uniform(seed) * 1e-6 * size)
+        .collect();
     system.step(x, &d, 1.0);
 }
 

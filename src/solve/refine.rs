@@ -63,6 +63,13 @@ impl SymLower<'_> {
         }
     }
 
+    /// The product A x.
+    pub fn product(&self, x: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; self.n()];
+        self.terms(x, |i, v, xj| out[i] += v * xj);
+        out
+    }
+
     /// Row sums of |A_ij||x_j|: the size of the terms a residual adds up.
     pub fn abs_product(&self, x: &[f64]) -> Vec<f64> {
         let mut out = vec![0.0; self.n()];

@@ -125,6 +125,7 @@ pub(super) fn trust_region(
                 &mut lambda,
                 opts,
                 &mut report,
+                &mut seed,
             )? {
                 Some(Trial::Taken) => {
                     taken = true;
@@ -161,10 +162,12 @@ fn try_step(
     lambda: &mut f64,
     opts: &NewtonOptions,
     report: &mut SolveReport,
+    seed: &mut u64,
 ) -> Result<Option<Trial>, SolveError> {
     let nf = system.num_free;
     let tf = Instant::now();
     let mut shifted = values.to_vec();
+    let mut indefinite = false;
     let llt = loop {
         shifted.copy_from_slice(values);
         for (&k, &s) in system.diag.iter().zip(scaling) {
@@ -174,11 +177,22 @@ fn try_step(
         if let Some(llt) = system.try_factor(&shifted)? {
             break llt;
         }
+        indefinite = true;
         *lambda = grow(*lambda);
         if *lambda > 1e12 {
             return Ok(None);
         }
     };
+    // the shift hid negative curvature: go down it first (the trust region's hard case)
+    if indefinite {
+        let dir = super::curvature::direction(system, &llt, &shifted, *lambda, scaling, seed);
+        if let Some((v, c)) = dir {
+            if super::curvature::search(model, system, x, trial, (&v, c), gf, energy, report) {
+                report.curvature_steps += 1;
+                return Ok(Some(Trial::Taken));
+            }
+        }
+    }
     let mut d: Vec<f64> = gf.iter().map(|g| -g).collect();
     let rhs = d.clone();
     llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut d, nf, 1));

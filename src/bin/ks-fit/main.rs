@@ -157,6 +157,10 @@ enum Command {
         /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
         #[arg(long)]
         allow_outside: bool,
+        /// Solver strategy of every strip and cantilever solve: full-step, ramp, trust-region
+        /// or adaptive (see `bend --help`).
+        #[arg(long, default_value = "full-step")]
+        strategy: kshell::solve::Strategy,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -266,6 +270,7 @@ fn main() -> ExitCode {
             nodes,
             max_error,
             allow_outside,
+            strategy,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
@@ -278,6 +283,7 @@ fn main() -> ExitCode {
             nodes,
             max_error,
         )
+        .map(|opts| kshell::fit::FitOptions { strategy, ..opts })
         .and_then(|opts| {
             cmd_fit(
                 &file,
