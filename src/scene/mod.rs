@@ -817,11 +817,17 @@ pub struct BendResult {
     pub stable_out_of_plane: Option<bool>,
 }
 
+/// Default element size of a cantilever mesh, m (as the 8 × 12 tensile mesh of a 50 × 75 mm
+/// strip).
+pub const BEND_ELEMENT: f64 = 6.25e-3;
+
 impl CantileverBend {
     pub fn new(width: f64, overhang: f64, angle_deg: f64) -> Self {
-        // elements of about 6.25 mm, as the 8 × 12 tensile mesh, at least 4 across
-        let nx = ((width / 6.25e-3).round() as usize).max(4);
-        let ny = ((overhang / (width / nx as f64)).round() as usize).max(2);
+        // elements of about 6.25 mm, at least 4 across; a narrow strip keeps 6.25 mm along
+        // (how finely it must be cut along depends on its curvature, not its width)
+        let nx = ((width / BEND_ELEMENT).round() as usize).max(4);
+        let along = (width / nx as f64).max(BEND_ELEMENT);
+        let ny = ((overhang / along).round() as usize).max(2);
         Self {
             width,
             overhang,
