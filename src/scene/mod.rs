@@ -461,17 +461,31 @@ impl StripRig {
         let rest = self.model.basis.control_points.clone();
         let mut grad = vec![[0.0; 3]; nn];
         let mut out = Vec::with_capacity(self.elongations.len());
-        let mut previous: Option<(f64, Vec<Vec3>)> = None;
+        // the last equilibrium: elongation, positions, and ∂q/∂(elongation) there
+        let mut previous: Option<(f64, Vec<Vec3>, Option<Vec<f64>>)> = None;
         for i in 0..self.elongations.len() {
             let dl = self.elongations[i];
-            // predictor: stretch the last equilibrium affinely to the new jaw position
-            let cold = |previous: &Option<(f64, Vec<Vec3>)>| {
-                let (current, mut x) = previous.clone().unwrap_or((0.0, rest.clone()));
-                let s = (self.length + dl) / (self.length + current);
-                for p in &mut x {
-                    p[1] *= s;
+            // predictor: the last equilibrium moved along its tangent to the new jaw position
+            // (Euler continuation on the factorised tangent), or, where there is none (the
+            // first point, an unstable equilibrium), stretched affinely
+            type Last = Option<(f64, Vec<Vec3>, Option<Vec<f64>>)>;
+            let cold = |system: &FreeSystem, previous: &Last| match previous {
+                Some((current, x, Some(slope))) => {
+                    let mut x = x.clone();
+                    let step: Vec<f64> = slope.iter().map(|v| v * (dl - current)).collect();
+                    system.advance(&mut x, &step);
+                    x
                 }
-                x
+                _ => {
+                    let (current, mut x) = previous
+                        .as_ref()
+                        .map_or((0.0, rest.clone()), |(c, x, _)| (*c, x.clone()));
+                    let s = (self.length + dl) / (self.length + current);
+                    for p in &mut x {
+                        p[1] *= s;
+                    }
+                    x
+                }
             };
             let warm = self.equilibria[i].as_ref().map(|x| {
                 let mut x = x.clone();
@@ -522,13 +536,13 @@ impl StripRig {
                 Some(x) => match solve(x, self.solver.max_iterations.min(WARM_ITERATIONS)) {
                     Ok(r) => r,
                     Err(_) => solve(
-                        cold(&previous),
+                        cold(&self.system, &previous),
                         self.retry_iterations
                             .unwrap_or(self.solver.max_iterations)
                             .min(self.solver.max_iterations),
                     )?,
                 },
-                None => solve(cold(&previous), self.solver.max_iterations)?,
+                None => solve(cold(&self.system, &previous), self.solver.max_iterations)?,
             };
             let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
                 stage: "reaction".into(),
@@ -542,6 +556,7 @@ impl StripRig {
                 .iter()
                 .map(|&(d, r)| r * grad[d / 3][d % 3])
                 .sum();
+            let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
             let dforce = if sensitivities {
                 let (df, dq) =
                     self.force_sensitivities(&x, lin)
@@ -564,9 +579,30 @@ impl StripRig {
             each(&point);
             out.push(point);
             self.equilibria[i] = Some(x.clone());
-            previous = Some((dl, x));
+            previous = Some((dl, x, slope));
         }
         Ok(out)
+    }
+
+    /// ∂q/∂(elongation) at an equilibrium: with x = T q + x̄ and the jaw's motion u = ∂x̄/∂(dl)
+    /// (the moving clamp's y DOFs, and the slaves' offset rates), K ∂q/∂(dl) = −Tᵀ H u.
+    fn elongation_tangent(&self, lin: &crate::solve::Linearization) -> Vec<f64> {
+        let nn = self.model.num_nodes();
+        let mut u = vec![[0.0; 3]; nn];
+        for &d in &self.top_fixed {
+            if d % 3 == 1 {
+                u[d / 3][1] = 1.0;
+            }
+        }
+        for (s, r) in self.system.slaves().iter().zip(&self.rate) {
+            u[s.dof / 3][s.dof % 3] = *r;
+        }
+        let mut hu = vec![[0.0; 3]; nn];
+        lin.hessian.mul(&u, &mut hu);
+        lin.solve_reduced(&self.system, &hu)
+            .into_iter()
+            .map(|v| -v)
+            .collect()
     }
 
     /// ∂F/∂k and ∂q/∂k (reduced) for every parameter.
