@@ -19,9 +19,7 @@ fn curves(m: &FabricMaterial, strains: &[f64]) -> Vec<(&'static str, Vec<Tensile
             ..NewtonOptions::default()
         };
         let dl: Vec<f64> = strains.iter().map(|s| s * 0.075).collect();
-        let curve = strip
-            .run(m, &dl)
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let curve = strip.run(m, &dl).unwrap_or_else(|e| panic!("{name}: {e}"));
         for p in &curve {
             assert!(p.report.stable, "{name}: a saddle at {} m", p.elongation);
         }
