@@ -14,7 +14,7 @@ pub enum Case {
     /// 90 mm cantilever of a stiff law (a11 = 1e8 Pa, τ = 0.2 mm), its whole weight brought on
     /// as the strategy chooses.
     CantileverFullGravity,
-    /// The heavy ASTM D1388 cantilever (25 × 47.7207 mm, τ = 0.2 mm, a11 = a22 = 2e7 Pa,
+    /// The heavy ASTM D1388 cantilever (25 × 47.7349 mm, τ = 0.2 mm, a11 = a22 = 2e7 Pa,
     /// 100 g/m²: overhang twice the bending length, chord angle 41.4873°).
     HeavyD1388,
     /// τ = 0.05 mm, a11 = 1e9 Pa and a11 / G12 = 10^`exponent`, bias strip to 5 % in one step:
@@ -165,7 +165,7 @@ impl Case {
                     g12: 1.0e7,
                 }),
             };
-            let mut bend = CantileverBend::new(0.025, 0.0477207, 90.0);
+            let mut bend = CantileverBend::new(0.025, 0.0477349, 90.0);
             bend.mesh = if reduced { (4, 8) } else { (4, 16) };
             (m, bend)
         } else {

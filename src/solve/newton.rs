@@ -98,7 +98,6 @@ pub(super) fn line_search(
     let mut mu = 0.0f64;
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
     let mut be_energy: Vec<f64> = Vec::new();
-    let mut curvature_first = super::curvature::FIRST_STEP;
     // (energy, residual) after recent Newton steps, for the stagnation rule
     let mut history: Vec<(f64, f64)> = Vec::new();
     // a Newton step at a residual under STALL_RTOL found no use: the round-off floor
@@ -199,7 +198,6 @@ pub(super) fn line_search(
                             &gf,
                             energy,
                             &mut report,
-                            &mut curvature_first,
                         );
                         if moved {
                             report.factorizations += 1;

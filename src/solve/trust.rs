@@ -32,13 +32,6 @@ const LAMBDA_DROP: f64 = 1e-9;
 /// Rejected steps in a row before the line-search solver takes over.
 pub const MAX_REJECTIONS: usize = 30;
 
-/// What the trial steps carry from one to the next.
-struct State {
-    seed: u64,
-    /// first step of the next negative-curvature search (see `curvature::search`)
-    curvature_first: f64,
-}
-
 /// What one trial step gave.
 enum Trial {
     Taken,
@@ -67,10 +60,6 @@ pub(super) fn trust_region(
     let (mut trial, mut gf) = (x.to_vec(), vec![0.0; nf]);
     let (mut scaling, mut lambda) = (vec![0.0; nf], 0.0f64);
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    let mut state = State {
-        seed: 0x2545_f491_4f6c_dd1du64,
-        curvature_first: super::curvature::FIRST_STEP,
-    };
     let mass = system.free_mass(&model.lumped_mass());
     let (mut at_floor, mut last_residual) = (false, f64::INFINITY);
     system.apply_constraints(x);
@@ -136,7 +125,7 @@ pub(super) fn trust_region(
                 &mut lambda,
                 opts,
                 &mut report,
-                &mut state,
+                &mut seed,
             )? {
                 Some(Trial::Taken) => {
                     taken = true;
@@ -173,7 +162,7 @@ fn try_step(
     lambda: &mut f64,
     opts: &NewtonOptions,
     report: &mut SolveReport,
-    state: &mut State,
+    seed: &mut u64,
 ) -> Result<Option<Trial>, SolveError> {
     let nf = system.num_free;
     let tf = Instant::now();
@@ -196,12 +185,9 @@ fn try_step(
     };
     // the shift hid negative curvature: go down it first (the trust region's hard case)
     if indefinite {
-        let dir =
-            super::curvature::direction(system, &llt, &shifted, *lambda, scaling, &mut state.seed);
+        let dir = super::curvature::direction(system, &llt, &shifted, *lambda, scaling, seed);
         if let Some((v, c)) = dir {
-            let first = &mut state.curvature_first;
-            if super::curvature::search(model, system, x, trial, (&v, c), gf, energy, report, first)
-            {
+            if super::curvature::search(model, system, x, trial, (&v, c), gf, energy, report) {
                 report.curvature_steps += 1;
                 return Ok(Some(Trial::Taken));
             }
