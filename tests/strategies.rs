@@ -4,7 +4,7 @@
 //! first step) each strategy must still end at a stable state, but not necessarily the same
 //! one: wrinkle patterns are not unique.
 
-use kshell::material::{Cutoffs, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};
+use kshell::material::{FabricMaterial, OrthotropicStvk};
 use kshell::scene::{TensilePoint, TensileStrip};
 use kshell::solve::{NewtonOptions, Strategy};
 
@@ -30,25 +30,7 @@ fn curves(m: &FabricMaterial, strains: &[f64]) -> Vec<(&'static str, Vec<Tensile
 
 #[test]
 fn every_strategy_gives_the_same_forces_where_the_equilibrium_is_unique() {
-    let stiff = Eta {
-        mu: vec![0.6, 0.3, 0.1],
-        alpha: vec![1.0, 6.0, 14.0],
-    };
-    let m = FabricMaterial {
-        name: "stiffening".into(),
-        areal_density: 0.15,
-        thickness: 2.0e-4,
-        law: Orthotropic {
-            a11: 1.0e8,
-            a22: 6.0e7,
-            a12: 1.0e7,
-            g12: 1.5e6,
-            warp: stiff.clone(),
-            weft: stiff.clone(),
-            shear: stiff,
-            cutoffs: Cutoffs::none(),
-        },
-    };
+    let m = kshell::atlas::stiffening();
     let all = curves(&m, &[0.1, 0.2]);
     let (_, reference) = &all[0];
     for (name, curve) in &all {

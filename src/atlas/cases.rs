@@ -203,7 +203,9 @@ fn absorb(row: &mut Row, r: &SolveReport) {
     row.stable = r.stable;
 }
 
-fn stiffening() -> FabricMaterial {
+/// The atlas's stiffening material: a degree-3 η (μ 0.6, 0.3, 0.1; α 1, 6, 14) in every
+/// direction, a11 = 1e8 Pa, τ = 0.2 mm, 150 g/m².
+pub fn stiffening() -> FabricMaterial {
     let stiff = Eta {
         mu: vec![0.6, 0.3, 0.1],
         alpha: vec![1.0, 6.0, 14.0],

@@ -9,7 +9,7 @@ mod cases;
 mod chart;
 mod table;
 
-pub use cases::Case;
+pub use cases::{stiffening, Case};
 pub use chart::to_svg;
 pub use table::{explain, summary, to_csv, to_markdown};
 

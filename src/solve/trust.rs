@@ -12,12 +12,12 @@
 //! shift makes the system positive definite, [`super::newton`]'s line-search solver (with its
 //! fallback) takes over from the current state.
 
-use super::newton::{balance, perturb, Balance};
+use super::newton::{linearize, perturb, Balance};
 use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL,
 };
-use crate::assembly::{BlockMatrix, ShellModel, Want};
+use crate::assembly::{BlockMatrix, ShellModel};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::MatMut;
@@ -64,28 +64,22 @@ pub(super) fn trust_region(
     let (mut at_floor, mut last_residual) = (false, f64::INFINITY);
     system.apply_constraints(x);
     for it in 0..=opts.max_iterations {
-        let ta = Instant::now();
-        let energy = model
-            .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hess))
-            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-        report.assembly_seconds += ta.elapsed().as_secs_f64();
-        report.energy = energy;
-        system.values(&hess, &mut values);
-        let Balance {
-            gnorm,
-            scale,
-            floor,
-        } = balance(
+        let (
+            energy,
+            Balance {
+                gnorm,
+                scale,
+                floor,
+            },
+        ) = linearize(
+            model,
             system,
             x,
-            &grad,
-            &external,
-            external_scale,
-            &values,
-            &mut gf,
-        );
-        report.residual = if scale > 0.0 { gnorm / scale } else { gnorm };
-        report.iterations = it;
+            it,
+            (&mut grad, &mut hess, &mut values, &mut gf),
+            (&external, external_scale),
+            &mut report,
+        )?;
         // as in Newton: a step that does not halve a residual under STALL_RTOL is at the floor
         let stalled = gnorm <= STALL_RTOL * scale && (at_floor || gnorm >= 0.5 * last_residual);
         last_residual = gnorm;
