@@ -30,6 +30,7 @@ fn main() {
         areal_density: 0.1036,
         thickness: 1.8e-4,
         law: law.into(),
+        bending: None,
     };
     let mesh = rectangular_grid(0.05, 0.075, 32, 48);
     let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();

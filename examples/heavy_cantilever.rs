@@ -22,6 +22,7 @@ fn main() {
             g12: 1.0e6,
         }
         .into(),
+        bending: None,
     };
     let c = (a11 * tau.powi(3) / 12.0 / (rho * STANDARD_GRAVITY)).cbrt();
     println!(

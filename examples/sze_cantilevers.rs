@@ -14,6 +14,7 @@ fn sze() -> FabricMaterial {
         areal_density: 1.0,
         thickness: 0.1,
         law: OrthotropicStvk::isotropic(1.2e6, 0.0).into(),
+        bending: None,
     }
 }
 

@@ -35,6 +35,7 @@ curve = \"a22.5-1.csv\"
 angle_deg = 90
 width_mm = 25
 overhang_mm = 61.0
+drape_angle_deg = 41.5
 ";
 
 const CSV: &str = "elongation_mm,force_n\n0.75,20.5\n1.5,41.0\n3.0,80.0\n";
@@ -98,7 +99,7 @@ fn check_errors_name_file_and_line_with_exit_code_2() {
         (
             format!("{TOML}colour = \"blue\"\n"),
             CSV.to_string(),
-            "fabric.toml:21: unknown field `colour`",
+            "fabric.toml:22: unknown field `colour`",
         ),
         (
             TOML.replace("areal_density_g_m2 = 103.6\n", ""),
@@ -197,6 +198,9 @@ fn synth_round_trip_checks_rises_and_reproduces_the_drape_angle() {
     for b in &data.bend {
         let overhang = format!("{:?}", b.overhang * 1e3);
         let angle = format!("{}", b.angle_deg);
+        // synth solves on the default mesh cut four times finer along
+        let (nx, ny) = kshell::scene::CantileverBend::new(b.width, b.overhang, b.angle_deg).mesh;
+        let mesh = format!("{nx}x{}", kshell::synth::BEND_REFINE * ny);
         let (rc, out, err) = ks_fit(&[
             "bend",
             "--material",
@@ -205,6 +209,8 @@ fn synth_round_trip_checks_rises_and_reproduces_the_drape_angle() {
             &angle,
             "--overhang",
             &overhang,
+            "--mesh",
+            &mesh,
         ]);
         assert_eq!(rc, 0, "{err}");
         let drape: f64 = out

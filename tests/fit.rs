@@ -28,8 +28,12 @@ alpha = [1.0, 300.0]
 /// A noise-free dataset of `DEGREE2` written by `ks-fit synth` into `dir/data` with `points`
 /// per curve, on the fit's own first mesh (so that a perfect fit exists).
 fn synth_degree2(dir: &std::path::Path, points: &str) -> std::path::PathBuf {
+    synth(dir, DEGREE2, points)
+}
+
+fn synth(dir: &std::path::Path, material_text: &str, points: &str) -> std::path::PathBuf {
     let material = dir.join("degree2.toml");
-    std::fs::write(&material, DEGREE2).unwrap();
+    std::fs::write(&material, material_text).unwrap();
     let data = dir.join("data");
     let (rc, out, err) = ks_fit(&[
         "synth",
@@ -72,6 +76,9 @@ fn noise_free_degree2_data_are_fitted_back() {
         "--max-degree",
         "2",
         "--protocol",
+        "paper",
+        // the material bends as the paper's model does: one thickness for both bends
+        "--bending",
         "paper",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
@@ -131,6 +138,72 @@ fn noise_free_degree2_data_are_fitted_back() {
         csv.starts_with("elongation_mm,measured_n,fitted_n,rel_error\n"),
         "{csv}"
     );
+}
+
+/// Bending of its own (issue: "a material you can trust", item 3): a fabric twice as stiff in
+/// bending across the weft as along the warp, although its warp is the stiffer in tension
+/// (ratios 0.5 and 1.7). The paper's one thickness cannot drape both cantilevers at 41.5°;
+/// the default (orthotropic, both bends present) fits both and recovers the rigidities.
+#[test]
+fn bending_of_its_own_fits_both_drapes_where_one_thickness_cannot() {
+    let dir = folder("fit-own-bending");
+    let material = format!("{DEGREE2}[bending]\nwarp_n_m = 3.0e-5\nweft_n_m = 6.0e-5\n");
+    let data = synth(&dir, &material, "5");
+    let fabric = data.join("fabric.toml");
+    let run = |mode: Option<&str>| {
+        let fitted = dir.join(format!("fit-{}.toml", mode.unwrap_or("default")));
+        let mut args = vec![
+            "fit",
+            s(&fabric),
+            "-o",
+            s(&fitted),
+            "--mesh-ladder",
+            "8x12",
+            "--max-degree",
+            "1",
+            "--protocol",
+            "paper",
+            "--quiet",
+        ];
+        if let Some(m) = mode {
+            args.extend(["--bending", m]);
+        }
+        let (rc, out, err) = ks_fit(&args);
+        assert!(rc == 0 || rc == 3, "{out}{err}");
+        let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
+        let drapes: Vec<f64> = doc["fit"]["test"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|t| t["kind"].as_str() == Some("bend"))
+            .map(|t| t["drape_angle_deg"].as_float().unwrap())
+            .collect();
+        assert_eq!(drapes.len(), 2);
+        if mode.is_none() {
+            // standard errors: the yarn stiffness from its curve, the rigidities exactly
+            // determined (two bends, two rigidities), the twist assumed
+            let u = doc["fit"]["uncertainty"]
+                .as_table()
+                .expect("[fit.uncertainty]");
+            assert_eq!(u["a11_pa"]["determined"].as_bool(), Some(true));
+            assert!(u["a11_pa"]["std_error"].as_float().unwrap() > 0.0);
+            assert_eq!(u["bending_warp_n_m"]["basis"].as_str(), Some("none"));
+            assert_eq!(u["bending_twist_n_m"]["determined"].as_bool(), Some(false));
+        }
+        (kshell::material::load_material(&fitted).unwrap(), drapes)
+    };
+    let (own, drapes) = run(None);
+    let b = own.bending.expect("the default writes a [bending] table");
+    for (got, want, what) in [(b.warp, 3.0e-5, "warp"), (b.weft, 6.0e-5, "weft")] {
+        assert!((got / want - 1.0).abs() < 0.03, "{what} rigidity {got:e}");
+    }
+    for a in &drapes {
+        assert!((a - 41.5).abs() < 0.2, "drape {a}° ({drapes:?})");
+    }
+    let (paper, drapes) = run(Some("paper"));
+    assert!(paper.bending.is_none());
+    let worst = drapes.iter().map(|a| (a - 41.5).abs()).fold(0.0, f64::max);
+    assert!(worst > 3.0, "one thickness drapes both at {drapes:?}");
 }
 
 #[test]

@@ -70,6 +70,7 @@ fn nonlinear_degree2() -> FabricMaterial {
                 e12: (-0.1, 0.1),
             },
         },
+        bending: None,
     }
 }
 

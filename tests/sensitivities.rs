@@ -28,6 +28,7 @@ fn material() -> FabricMaterial {
             },
             cutoffs: Cutoffs::none(),
         },
+        bending: None,
     }
 }
 
@@ -116,4 +117,61 @@ fn drape_angle_sensitivities_match_differences_of_full_solves() {
     let first = rig.run(false).unwrap().drape_angle_deg;
     let second = rig.run(false).unwrap().drape_angle_deg;
     assert!((first - second).abs() < 1e-9 && (first - exact.drape_angle_deg).abs() < 1e-9);
+}
+
+/// Bending of its own: ∂angle/∂B for the three rigidities (and a11, τ) against differences.
+#[test]
+fn drape_angle_sensitivities_to_own_rigidities_match_differences() {
+    use kshell::material::BendingRigidity;
+    use kshell::scene::{BendRig, CantileverBend};
+    let mut m = material();
+    let b0 = BendingRigidity {
+        warp: 4.0e-4,
+        weft: 1.5e-4,
+        twist: 5.0e-6,
+    };
+    m.bending = Some(b0);
+    let nlaw = m.law.params().len();
+    // a strip cut at 30° from the weft bends, twists and (through the clamp) couples all three
+    for angle_cut in [30.0] {
+        let mut bend = CantileverBend::new(0.025, 0.15, angle_cut);
+        bend.mesh = (4, 10);
+        bend.solver.rtol = 1e-13;
+        let angle = |mm: &FabricMaterial, sens: bool| {
+            let mut rig = BendRig::new(&bend, mm).unwrap();
+            rig.run(sens).unwrap()
+        };
+        let exact = angle(&m, true);
+        assert_eq!(exact.dangle.len(), nlaw + 4);
+        assert!(exact.drape_angle_deg > 5.0, "{}", exact.drape_angle_deg);
+        for j in [0, nlaw, nlaw + 1, nlaw + 2, nlaw + 3] {
+            let at = |rel: f64| {
+                let mut mm = m.clone();
+                let b = mm.bending.as_mut().unwrap();
+                match j - nlaw.min(j) {
+                    _ if j == 0 => mm.law.a11 *= 1.0 + rel,
+                    0 => mm.thickness *= 1.0 + rel,
+                    1 => b.warp *= 1.0 + rel,
+                    2 => b.weft *= 1.0 + rel,
+                    _ => b.twist *= 1.0 + rel,
+                }
+                angle(&mm, false).drape_angle_deg
+            };
+            let k = match j - nlaw.min(j) {
+                _ if j == 0 => m.law.a11,
+                0 => m.thickness,
+                1 => b0.warp,
+                2 => b0.weft,
+                _ => b0.twist,
+            };
+            let h = 1e-6;
+            let fd = (at(h) - at(-h)) / (2.0 * h * k);
+            let scale = exact.drape_angle_deg / k;
+            assert!(
+                (exact.dangle[j] - fd).abs() <= 1e-5 * scale + 1e-6 * fd.abs(),
+                "cut {angle_cut}°, parameter {j}: exact {} vs differences {fd}",
+                exact.dangle[j]
+            );
+        }
+    }
 }

@@ -186,6 +186,7 @@ fn fabric(law: OrthotropicStvk, tau: f64) -> FabricMaterial {
         areal_density: 0.1,
         thickness: tau,
         law: law.into(),
+        bending: None,
     }
 }
 

@@ -54,6 +54,7 @@ fn every_strategy_ends_stable_on_a_wrinkling_strip() {
             g12: 1.0e5,
         }
         .into(),
+        bending: None,
     };
     for (name, curve) in curves(&m, &[0.01, 0.03]) {
         let forces: Vec<f64> = curve.iter().map(|p| p.force).collect();

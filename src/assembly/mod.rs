@@ -14,12 +14,17 @@
 //! The Hessian lives in a [`BlockMatrix`]: 3 × 3 blocks on the node pairs (i ≤ j) that share a
 //! Gauss point, a pattern built once per mesh.
 
-use crate::material::{Law, OutOfDomain};
+mod section;
+mod sensitivities;
+pub use sensitivities::BENDING_PARAMS;
+
+use crate::material::{BendingRigidity, Law, OutOfDomain};
 use crate::quadrature::GaussLegendre;
 use crate::shell::{kinematic_vector, RestError, RestPoint, YMat, YVec};
 use crate::subdiv::LimitBasis;
 use crate::Vec3;
 use nalgebra::{Matrix3, Vector3};
+use section::Section;
 use std::sync::Arc;
 
 /// Upper-triangular node-pair pattern in compressed rows: row i lists the nodes j ≥ i that share
@@ -152,6 +157,8 @@ pub struct ShellModel {
     external_gradient: Vec<Vec3>,
     /// (ξ, weight) through the thickness
     thickness_rule: Vec<(f64, f64)>,
+    /// Bending of its own (`None`: the paper's section, the law through the thickness)
+    bending: Option<BendingRigidity>,
     pub pattern: Arc<BlockPattern>,
     /// Sorted control points touched by each face's Gauss points.
     face_nodes: Vec<Vec<u32>>,
@@ -282,6 +289,7 @@ impl ShellModel {
             pressure: 0.0,
             edge_moment: None,
             thickness_rule,
+            bending: None,
             pattern,
         };
         model.set_gravity([0.0; 3]);
@@ -507,35 +515,21 @@ impl ShellModel {
         let rest = &self.rest[q];
         if want == Want::Energy {
             let (em, eb) = rest.strain_values(y);
-            let mut energy = 0.0;
-            for &(xi, w) in &self.thickness_rule {
-                energy += w * self.law.response(&(em + xi * eb))?.psi;
-            }
-            return Ok((rest.d_area * energy, YVec::zeros(), None));
+            let e = self.section(&em, &eb, want)?.energy;
+            return Ok((rest.d_area * e, YVec::zeros(), None));
         }
         let (m, b) = rest.strains(y);
         let em = Vector3::from(m.value);
         let eb = Vector3::from(b.value);
-        let mut energy = 0.0;
-        let (mut n, mut mo) = (Vector3::zeros(), Vector3::zeros());
-        let (mut c0, mut c1, mut c2) = (Matrix3::zeros(), Matrix3::zeros(), Matrix3::zeros());
-        for &(xi, w) in &self.thickness_rule {
-            let r = self.law.response(&(em + xi * eb))?;
-            energy += w * r.psi;
-            if want != Want::Energy {
-                n += w * r.stress;
-                mo += w * xi * r.stress;
-            }
-            if want == Want::Hessian {
-                c0 += w * r.tangent;
-                c1 += (w * xi) * r.tangent;
-                c2 += (w * xi * xi) * r.tangent;
-            }
-        }
+        let Section {
+            energy,
+            n,
+            mo,
+            c0,
+            c1,
+            c2,
+        } = self.section(&em, &eb, want)?;
         let da = rest.d_area;
-        if want == Want::Energy {
-            return Ok((da * energy, YVec::zeros(), None));
-        }
         let mut g = YVec::zeros();
         for k in 0..3 {
             g += n[k] * m.grad[k] + mo[k] * b.grad[k];
@@ -888,6 +882,16 @@ impl ShellModel {
         Ok(())
     }
 
+    /// Gives the bending its own rigidities (`None`: the paper's section); see
+    /// [`crate::material::bending`].
+    pub fn set_bending(&mut self, bending: Option<BendingRigidity>) {
+        self.bending = bending;
+    }
+
+    pub fn bending(&self) -> Option<BendingRigidity> {
+        self.bending
+    }
+
     /// The smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12, warp/weft frame) over the
     /// Gauss points at `x`: what a test actually exercised.
     pub fn membrane_strain_range(&self, x: &[Vec3]) -> ([f64; 3], [f64; 3]) {
@@ -910,99 +914,6 @@ impl ShellModel {
             }
         }
         (lo, hi)
-    }
-
-    /// ∂E/∂k and ∂(∂E/∂x)/∂k at `x` for every parameter k of the law and, last, the thickness
-    /// τ (the fitter's right-hand sides, paper Eq. 6). With the thickness rule ξ_q = τ t_q / 2,
-    /// w̃_q = τ w_q / 2, the τ-derivative is that of the quadrature actually used:
-    /// ∂/∂τ Σ w̃ ψ(Ẽ_m + ξ Ẽ_b) = Σ (w̃/τ) ψ + Σ w̃ (ξ/τ) S·Ẽ_b.
-    pub fn sensitivities(&self, x: &[Vec3]) -> Result<Sensitivities, OutOfDomain> {
-        self.sensitivities_of(x, None)
-    }
-
-    /// [`ShellModel::sensitivities`] for the parameters marked true only (law parameters, then
-    /// thickness; `None`: all); the others are left at zero.
-    pub fn sensitivities_of(
-        &self,
-        x: &[Vec3],
-        wanted: Option<&[bool]>,
-    ) -> Result<Sensitivities, OutOfDomain> {
-        let want = |j: usize| wanted.is_none_or(|w| w.get(j).copied().unwrap_or(true));
-        let mut names = self.law.param_names();
-        names.push("thickness".into());
-        let np = names.len();
-        let nn = self.num_nodes();
-        let tau = self.thickness;
-        let mut energy = vec![0.0; np];
-        let mut gradient = vec![vec![[0.0; 3]; nn]; np];
-        for q in 0..self.basis.num_points() {
-            let (idx, w) = self.basis.stencil(q);
-            let mut d = [[0.0; 3]; 6];
-            for (&i, wi) in idx.iter().zip(w) {
-                for k in 1..6 {
-                    for c in 0..3 {
-                        d[k][c] += wi[k] * x[i as usize][c];
-                    }
-                }
-            }
-            let y = kinematic_vector(&d);
-            let rest = &self.rest[q];
-            let (m, b) = rest.strains(&y);
-            let em = Vector3::from(m.value);
-            let eb = Vector3::from(b.value);
-            let da = rest.d_area;
-            let mut dey = vec![0.0; np];
-            let mut dgy = vec![YVec::zeros(); np];
-            for &(xi, wt) in &self.thickness_rule {
-                let e = em + xi * eb;
-                let r = self.law.response(&e)?;
-                let pr = self.law.param_response(&e)?;
-                // G(ξ)ᵀ v = Σ_k v_k (∇Ẽm_k + ξ ∇Ẽb_k)
-                let gt = |v: &Vector3<f64>| -> YVec {
-                    let mut out = YVec::zeros();
-                    for k in 0..3 {
-                        out += v[k] * (m.grad[k] + xi * b.grad[k]);
-                    }
-                    out
-                };
-                for j in 0..np - 1 {
-                    if want(j) {
-                        dey[j] += wt * pr.dpsi[j];
-                        dgy[j] += wt * gt(&pr.dstress[j]);
-                    }
-                }
-                if !want(np - 1) {
-                    continue;
-                }
-                let jt = np - 1;
-                dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
-                let mut gb = YVec::zeros();
-                for k in 0..3 {
-                    gb += r.stress[k] * b.grad[k];
-                }
-                dgy[jt] += (wt / tau) * gt(&r.stress)
-                    + (wt * xi / tau) * gb
-                    + (wt * xi / tau) * gt(&(r.tangent * eb));
-            }
-            for j in 0..np {
-                if !want(j) {
-                    continue;
-                }
-                energy[j] += da * dey[j];
-                for (&i, wi) in idx.iter().zip(w) {
-                    for k in 0..5 {
-                        for c in 0..3 {
-                            gradient[j][i as usize][c] += da * wi[k + 1] * dgy[j][3 * k + c];
-                        }
-                    }
-                }
-            }
-        }
-        Ok(Sensitivities {
-            names,
-            energy,
-            gradient,
-        })
     }
 
     /// Total energy.

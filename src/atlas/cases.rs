@@ -164,6 +164,7 @@ impl Case {
                     a12: 0.0,
                     g12: 1.0e7,
                 }),
+                bending: None,
             };
             let mut bend = CantileverBend::new(0.025, 0.0477349, 90.0);
             bend.mesh = if reduced { (4, 8) } else { (4, 16) };
@@ -224,5 +225,6 @@ pub fn stiffening() -> FabricMaterial {
             shear: stiff,
             cutoffs: Cutoffs::none(),
         },
+        bending: None,
     }
 }

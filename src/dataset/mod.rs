@@ -592,7 +592,18 @@ pub fn load_dataset_with(
         let width = t.positive(&what, "width_mm", &r.width_mm, 1e-3)?;
         let overhang = t.positive(&what, "overhang_mm", &r.overhang_mm, 1e-3)?;
         let drape_angle_deg = match &r.drape_angle_deg {
-            None => DEFAULT_DRAPE_ANGLE_DEG,
+            None => {
+                let message = format!(
+                    "{what}no drape_angle_deg: {DEFAULT_DRAPE_ANGLE_DEG}° (the ASTM D1388 target) is assumed; give the measured angle if it differs (the fitted bending rigidity goes with it)"
+                );
+                notes.push(format!("warning: {message}"));
+                warnings.push(DatasetWarning {
+                    file: file.clone(),
+                    line: Some(line_of(&text, spanned.span().start)),
+                    message,
+                });
+                DEFAULT_DRAPE_ANGLE_DEG
+            }
             Some(v) => {
                 let a = *v.get_ref();
                 if !(a > 0.0 && a < 90.0) {

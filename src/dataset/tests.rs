@@ -2,7 +2,7 @@
 
 use super::*;
 
-const TOML: &str = "name = \"poplin\"\nareal_density_g_m2 = 103.6\nthickness_mm = 0.18\n\n[[tensile]]\nangle_deg = 90\nwidth_mm = 50\ngauge_length_mm = 75\ncurve = \"warp-1.csv\"\n\n[[bend]]\nangle_deg = 90\nwidth_mm = 25\noverhang_mm = 61.0\n";
+const TOML: &str = "name = \"poplin\"\nareal_density_g_m2 = 103.6\nthickness_mm = 0.18\n\n[[tensile]]\nangle_deg = 90\nwidth_mm = 50\ngauge_length_mm = 75\ncurve = \"warp-1.csv\"\n\n[[bend]]\nangle_deg = 90\nwidth_mm = 25\noverhang_mm = 61.0\ndrape_angle_deg = 41.5\n";
 const CSV: &str = "elongation_mm,force_n\n0.75,20.5\n1.5,41.0\n3.0,80.0\n";
 
 /// A fresh folder holding `fabric.toml` = `toml` and `warp-1.csv` = `csv`.
@@ -48,7 +48,7 @@ fn reads_a_good_dataset_in_si_units() {
 fn partial_datasets_and_tolerant_csv_are_legal() {
     // no bend, so no density needed; spaces, CRLF, a BOM, comments and blank lines
     let toml = TOML.replace("areal_density_g_m2 = 103.6\n", "").replace(
-        "\n[[bend]]\nangle_deg = 90\nwidth_mm = 25\noverhang_mm = 61.0\n",
+        "\n[[bend]]\nangle_deg = 90\nwidth_mm = 25\noverhang_mm = 61.0\ndrape_angle_deg = 41.5\n",
         "",
     );
     let csv = "\u{feff} elongation_mm , force_n \r\n# zero first\r\n\r\n0 , 0\r\n 1.5, 41\r\n";
@@ -97,7 +97,7 @@ fn toml_errors_name_file_line_and_key() {
         ),
         (
             format!("{TOML}colour = 3\n"),
-            "fabric.toml:15: unknown field `colour`",
+            "fabric.toml:16: unknown field `colour`",
         ),
         (
             TOML.replace("gauge_length_mm = 75\n", ""),
@@ -154,11 +154,11 @@ fn toml_errors_name_file_line_and_key() {
             "fabric.toml:12: bend test 1: angle_deg must be in [0, 180)",
         ),
         (
-            format!("{TOML}drape_angle_deg = 90\n"),
+            TOML.replace("drape_angle_deg = 41.5", "drape_angle_deg = 90"),
             "fabric.toml:15: bend test 1: drape_angle_deg must be in (0, 90), got 90",
         ),
         (
-            format!("{TOML}drape_angle_deg = 0\n"),
+            TOML.replace("drape_angle_deg = 41.5", "drape_angle_deg = 0"),
             "fabric.toml:15: bend test 1: drape_angle_deg must be in (0, 90)",
         ),
         (
@@ -411,7 +411,21 @@ fn suspicious_data_gives_warnings() {
     let (d, w) = load("warn-twice", &twice, Some(CSV)).unwrap();
     assert_eq!(d.tests_at(90.0).len(), 2);
     assert_eq!(w.len(), 1, "{w:?}");
-    assert!(w[0].to_string().ends_with("fabric.toml:20: warning: tensile test 2: curve warp-1.csv is also used by the test at line 9"), "{}", w[0]);
+    assert!(w[0].to_string().ends_with("fabric.toml:21: warning: tensile test 2: curve warp-1.csv is also used by the test at line 9"), "{}", w[0]);
     let (_, w) = load("warn-empty", "name = \"x\"\nthickness_mm = 0.2\n", None).unwrap();
     assert!(w[0].message.contains("nothing to fit"), "{w:?}");
+}
+
+#[test]
+fn a_bend_without_its_drape_angle_is_a_warning() {
+    let toml = TOML.replace("drape_angle_deg = 41.5\n", "");
+    let (d, w) = load("no-drape", &toml, Some(CSV)).unwrap();
+    assert_eq!(d.bend[0].drape_angle_deg, 41.5);
+    assert_eq!(w.len(), 1, "{w:?}");
+    let shown = w[0].to_string();
+    assert!(
+        shown.contains("fabric.toml:11: warning: bend test 1: no drape_angle_deg: 41.5°"),
+        "{shown}"
+    );
+    assert!(d.notes.iter().any(|n| n.contains("no drape_angle_deg")));
 }

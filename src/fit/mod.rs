@@ -26,6 +26,7 @@
 //! worse, and is kept only when it lowers the error by the degree gain (30 %): the penalty
 //! for its two extra parameters.
 
+mod bending;
 pub mod bootstrap;
 pub mod map;
 pub mod optim;
@@ -34,12 +35,14 @@ pub mod report;
 mod rigs;
 mod stages;
 mod thickness;
+pub mod uncertainty;
 mod validation;
 pub mod verdict;
 
 use crate::dataset::{FabricDataset, Role};
-use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
+use crate::material::{BendingRigidity, Cutoffs, Eta, FabricMaterial, Orthotropic};
 use crate::scene::{SceneError, StripRig};
+pub use bending::BendingMode;
 use map::{A12Rule, Direction, StageMap};
 use nalgebra::DMatrix;
 use optim::{Evaluation, Method};
@@ -94,6 +97,8 @@ pub struct FitOptions {
     pub max_error: f64,
     /// How every strip and cantilever solve of the fit is globalised and its load brought on.
     pub strategy: crate::solve::Strategy,
+    /// Bending of its own (fitted rigidities) or the paper's one thickness.
+    pub bending: BendingMode,
 }
 
 impl Default for FitOptions {
@@ -116,6 +121,7 @@ impl Default for FitOptions {
             max_misalign_deg: 2.0,
             strategy: crate::solve::Strategy::default(),
             max_error: 0.10,
+            bending: BendingMode::Auto,
         }
     }
 }
@@ -184,6 +190,8 @@ pub struct FitResult {
     pub notes: Vec<String>,
     /// what the data determine and what was assumed
     pub identifiability: Vec<String>,
+    /// standard errors of the fitted parameters at the optimum, last mesh level
+    pub uncertainty: Vec<uncertainty::ParamError>,
     pub tests: Vec<TestOutcome>,
     /// the `max_error` the fit was asked for (the table's `verdict` column reads it)
     pub max_error: f64,
@@ -261,8 +269,16 @@ struct Fitter<'a> {
     degree_log: Vec<String>,
     notes: Vec<String>,
     prep: Prepared,
-    /// drape angles of the bend tests at the last thickness stage's result
+    /// drape angles of the bend tests at the last thickness or bending stage's result
     bend_angles: Vec<f64>,
+    /// the bends fit rigidities of their own (`--bending`) rather than the thickness
+    own_bending: bool,
+    /// those rigidities, once fitted
+    bending: Option<BendingRigidity>,
+    /// every tensile stage's standard errors, with its variables at the optimum
+    uncertainty: Vec<(Direction, Vec<f64>, Vec<uncertainty::ParamError>)>,
+    /// the thickness or bending stage's standard errors (last level)
+    stage_errors: Vec<uncertainty::ParamError>,
     /// strips already set up, warm
     rigs: HashMap<RigKey, StripRig>,
     /// node forces already predicted, by strip and parameter bits
@@ -281,7 +297,48 @@ impl Fitter<'_> {
             areal_density: self.data.areal_density.unwrap_or(0.1),
             thickness: self.thickness,
             law: self.law.clone(),
+            bending: self.bending,
         }
+    }
+
+    /// Every fitted parameter's standard error: each tensile stage's last run at the law's
+    /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
+    /// or bending stage's.
+    fn final_uncertainty(&self) -> Vec<uncertainty::ParamError> {
+        let mut out = Vec::new();
+        for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
+            let (eta, c) = match dir {
+                Direction::Warp => (&self.law.warp, self.law.a11),
+                Direction::Weft => (&self.law.weft, self.law.a22),
+                Direction::Shear => (&self.law.shear, self.law.g12),
+            };
+            let found = self.uncertainty.iter().rev().find(|(d, _, errors)| {
+                *d == dir
+                    && errors.iter().filter(|e| e.name.contains("_alpha_")).count() == eta.degree()
+            });
+            if let Some((_, _, errors)) = found {
+                for e in errors {
+                    let mut e = e.clone();
+                    if e.name.ends_with("_pa") && e.value > 0.0 {
+                        e.std_error = e.std_error.map(|s| s * c / e.value);
+                        e.value = c;
+                    }
+                    out.push(e);
+                }
+            }
+        }
+        out.extend(self.stage_errors.iter().cloned());
+        out
+    }
+
+    /// The current parameters (law, thickness, rigidities): a prediction's memo key.
+    fn param_bits(&self) -> Vec<u64> {
+        let mut p = self.law.params();
+        p.push(self.thickness);
+        if let Some(b) = self.bending {
+            p.extend([b.warp, b.weft, b.twist]);
+        }
+        p.iter().map(|v| v.to_bits()).collect()
     }
 
     fn time_stage(&mut self, stage: &str, t: Instant) {
@@ -389,6 +446,12 @@ pub fn fit(
         (None, Some(nu)) => A12Rule::Poisson(nu),
         _ => A12Rule::HalfMin,
     };
+    let own_bending = bending::use_own_bending(opts.bending, &data.bend)?;
+    if own_bending {
+        notes.push(
+            "bending of its own (--bending orthotropic): the bends fit the warp and weft flexural rigidities; the thickness only splits the strips' a·τ".into(),
+        );
+    }
     if data.bend.is_empty() && known.thickness.is_none() {
         notes.push(format!(
             "thickness not fitted (no bend tests): kept at the measured {:.3} mm",
@@ -421,6 +484,10 @@ pub fn fit(
         notes,
         prep,
         bend_angles: Vec::new(),
+        own_bending,
+        bending: None,
+        uncertainty: Vec::new(),
+        stage_errors: Vec::new(),
         rigs: Default::default(),
         predictions: Default::default(),
     };
@@ -454,6 +521,7 @@ pub fn fit(
     let t0 = Instant::now();
     let tests = validation::outcomes(&mut f, last)?;
     let identifiability = validation::identifiability(&f, &strips);
+    let uncertainty = f.final_uncertainty();
     if f.stats.unstable_solves > 0 {
         let n = f.stats.unstable_solves;
         f.notes.push(format!(
@@ -471,6 +539,7 @@ pub fn fit(
         degree_log: f.degree_log,
         notes: f.notes,
         identifiability,
+        uncertainty,
         tests,
         max_error: opts.max_error,
     })

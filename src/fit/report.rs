@@ -46,6 +46,26 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     let _ = writeln!(s, "max_error = {}", r.max_error);
     let _ = writeln!(s, "passed = {}", verdict.passed());
     let _ = writeln!(s, "verdict = {}", toml_str(&verdict.line));
+    if !r.uncertainty.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n[fit.uncertainty]    # standard errors at the optimum; basis: curves (spread across curves and repeats), points (independent point errors: a lower bound), none (not estimable), assumed"
+        );
+        for e in &r.uncertainty {
+            let se = e
+                .std_error
+                .map(|v| format!(", std_error = {v:.4e}"))
+                .unwrap_or_default();
+            let _ = writeln!(
+                s,
+                "{} = {{ value = {:?}{se}, basis = {}, determined = {} }}",
+                e.name,
+                e.value,
+                toml_str(e.basis),
+                e.determined
+            );
+        }
+    }
     let _ = writeln!(s, "\n[fit.stage_seconds]");
     for (stage, t) in &r.stats.stage_seconds {
         let _ = writeln!(s, "{} = {t:.3}", toml_str(stage));

@@ -89,6 +89,7 @@ impl Fitter<'_> {
         sens: bool,
     ) -> Result<NodeForces, SceneError> {
         rig.set_material(law, self.thickness)?;
+        rig.set_bending(self.bending);
         let pts = rig.run(sens)?;
         self.stats.evaluations += 1;
         self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
@@ -108,12 +109,7 @@ impl Fitter<'_> {
     ) -> Result<Vec<f64>, FitError> {
         let (key, mut rig) = self.strip_rig(s, angle, level)?;
         let law = self.law.clone();
-        let mut params = law.params();
-        params.push(self.thickness);
-        let memo_key = (
-            key.clone(),
-            params.iter().map(|v| v.to_bits()).collect::<Vec<u64>>(),
-        );
+        let memo_key = (key.clone(), self.param_bits());
         if let Some(f) = self.predictions.get(&memo_key) {
             let f = f.clone();
             self.keep_rig(key, rig);
@@ -143,9 +139,7 @@ impl Fitter<'_> {
     ) -> Result<Vec<Vec<f64>>, FitError> {
         use rayon::prelude::*;
         let law = self.law.clone();
-        let mut params = law.params();
-        params.push(self.thickness);
-        let bits: Vec<u64> = params.iter().map(|v| v.to_bits()).collect();
+        let bits = self.param_bits();
         let mut todo: Vec<(RigKey, StripRig, f64)> = Vec::new();
         for &(s, angle) in jobs {
             let (key, rig) = self.strip_rig(s, angle, level)?;
@@ -157,11 +151,12 @@ impl Fitter<'_> {
                 todo.push((key, rig, angle));
             }
         }
-        let tau = self.thickness;
+        let (tau, bending) = (self.thickness, self.bending);
         let results: Vec<Result<Vec<crate::scene::TensilePoint>, SceneError>> = todo
             .par_iter_mut()
             .map(|(_, rig, _)| {
                 rig.set_material(&law, tau)?;
+                rig.set_bending(bending);
                 rig.run(false)
             })
             .collect();

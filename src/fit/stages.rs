@@ -186,6 +186,7 @@ impl Fitter<'_> {
             let angle = self.prep.strips[s].angle_deg;
             let (key, mut rig) = self.strip_rig(s, angle, level)?;
             rig.set_wanted(Some(map.wanted(&self.law)));
+            rig.set_bending(self.bending);
             rigs.push((key, rig));
         }
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
@@ -203,7 +204,7 @@ impl Fitter<'_> {
         let tau = self.thickness;
         let prep = &self.prep;
         // every evaluation's variables and residuals, for the shape error at the optimum
-        let mut seen: Vec<(Vec<f64>, Vec<f64>)> = Vec::new();
+        let mut seen = super::uncertainty::Seen::new();
         let mut problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
             let mut law = base.clone();
             map.decode(q, &mut law);
@@ -244,8 +245,9 @@ impl Fitter<'_> {
                 }
             }
             evals += 1;
-            seen.push((q.to_vec(), r.clone()));
-            Ok(to_evaluation(r, j, q.len(), jac))
+            let e = to_evaluation(r, j, q.len(), jac);
+            seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
+            Ok(e)
         };
         let fail = |source| FitError::Scene {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
@@ -283,8 +285,8 @@ impl Fitter<'_> {
         let shape = seen
             .iter()
             .rev()
-            .find(|(q, _)| *q == p)
-            .map_or(err, |(_, r)| {
+            .find(|(q, _, _)| *q == p)
+            .map_or(err, |(_, r, _)| {
                 let mut rel = Vec::with_capacity(r.len());
                 let mut k = 0;
                 for &n in &lens {
@@ -294,6 +296,11 @@ impl Fitter<'_> {
                 }
                 super::shape_error(&lens, &rel)
             });
+        // standard errors at the optimum, from the Jacobian computed there
+        if let Some((r, j)) = super::uncertainty::at_optimum(&seen, &p) {
+            let errors = super::uncertainty::stage_errors(&map, &p, j, r, &lens, &self.law);
+            self.uncertainty.push((map.dir, p.clone(), errors));
+        }
         let angles: Vec<String> = strips
             .iter()
             .map(|&s| format!("{}°", self.prep.strips[s].angle_deg))
@@ -599,7 +606,9 @@ pub(super) fn ladder(
             }
         }
         let data = f.data;
-        if !data.bend.is_empty() && data.known.thickness.is_none() {
+        if f.own_bending {
+            f.bending_stage(&data.bend, level)?;
+        } else if !data.bend.is_empty() && data.known.thickness.is_none() {
             f.thickness_stage(&data.bend, level)?;
         }
         if li + 1 < opts.ladder.len() {

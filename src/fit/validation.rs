@@ -265,7 +265,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             f.bend_angles.push(r.drape_angle_deg);
         }
     }
-    let fitted = data.known.thickness.is_none();
+    let fitted = f.own_bending || data.known.thickness.is_none();
     for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
         tests.push(TestOutcome {
             kind: "bend",
@@ -334,8 +334,35 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
         ),
         A12Rule::Fixed(v) => format!("a12 = {v:.4e} Pa: known; G12 = {:.4e} Pa determined with it", l.g12),
     });
+    if let Some(b) = f.bending {
+        let off_axis = f
+            .data
+            .bend
+            .iter()
+            .any(|t| (t.angle_deg - 90.0).abs() > 1e-9 && t.angle_deg.abs() > 1e-9);
+        out.push(format!(
+            "bending rigidities B_warp = {:.5e} N·m, B_weft = {:.5e} N·m: determined by the warp and weft bends (bending of its own; ratio {:.3} against the tensile E1/E2 = {:.3})",
+            b.warp,
+            b.weft,
+            b.warp / b.weft,
+            e1 / e2
+        ));
+        out.push(if off_axis {
+            format!("twist rigidity B_twist = {:.5e} N·m: determined by the off-axis bends", b.twist)
+        } else {
+            format!(
+                "twist rigidity B_twist = {:.5e} N·m: assumed (no off-axis bend): the 45° bending compliance follows the membrane's, relative to warp and weft",
+                b.twist
+            )
+        });
+    }
     out.push(if k.thickness.is_some() {
         format!("thickness τ = {:.4} mm: known", tau * 1e3)
+    } else if f.bending.is_some() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
+            tau * 1e3
+        )
     } else if f.data.bend.is_empty() {
         format!(
             "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",

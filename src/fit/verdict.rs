@@ -203,6 +203,7 @@ mod tests {
             degree_log: Vec::new(),
             notes: Vec::new(),
             identifiability: Vec::new(),
+            uncertainty: Vec::new(),
             tests,
             max_error: 0.1,
         }

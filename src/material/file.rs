@@ -28,10 +28,20 @@
 //! e12_max = 0.20    # e12_min = -e12_max
 //! ```
 //!
+//! An optional `[bending]` table gives the bending its own rigidities (see [`super::bending`])
+//! instead of the paper's τ³/12 link to the membrane law:
+//!
+//! ```toml
+//! [bending]         # flexural rigidity per unit width, N·m (ASTM D1388's G = ρ g c³)
+//! warp_n_m = 2.0e-5
+//! weft_n_m = 6.0e-6
+//! bias_n_m = 4.0e-6 # optional (45°); or twist_n_m; absent: follows the membrane's anisotropy
+//! ```
+//!
 //! Unknown keys, missing keys, non-positive or non-finite values, Σμ ≠ 1 (beyond 1e-12),
 //! arrays of different lengths and α = 0 are errors that name the file, the line and the key.
 
-use super::{Cutoffs, Eta, Orthotropic, OrthotropicStvk};
+use super::{BendingRigidity, Cutoffs, Eta, Orthotropic, OrthotropicStvk};
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -50,6 +60,7 @@ struct RawMaterial {
     weft: Option<RawEta>,
     shear: Option<RawEta>,
     cutoffs: Option<RawCutoffs>,
+    bending: Option<RawBending>,
     /// written by `ks-fit fit` (how the material was obtained); read past, not used
     #[allow(dead_code)]
     fit: Option<toml::Value>,
@@ -60,6 +71,15 @@ struct RawMaterial {
 struct RawEta {
     mu: Vec<f64>,
     alpha: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBending {
+    warp_n_m: f64,
+    weft_n_m: f64,
+    bias_n_m: Option<f64>,
+    twist_n_m: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -81,6 +101,21 @@ pub struct FabricMaterial {
     /// m
     pub thickness: f64,
     pub law: Orthotropic,
+    /// Bending of its own (`[bending]`); `None`: the paper's section, τ³/12 times the law.
+    pub bending: Option<BendingRigidity>,
+}
+
+impl FabricMaterial {
+    /// The paper's model: bending from the law integrated through the thickness.
+    pub fn paper(name: &str, areal_density: f64, thickness: f64, law: Orthotropic) -> Self {
+        Self {
+            name: name.to_string(),
+            areal_density,
+            thickness,
+            law,
+            bending: None,
+        }
+    }
 }
 
 /// What is wrong with a material file.
@@ -328,12 +363,50 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             ));
         }
     }
+    let bending = match raw.bending {
+        None => None,
+        Some(b) => {
+            Some(bending(b, &law).map_err(|(key, message)| err(Some("bending"), key, message))?)
+        }
+    };
     Ok(FabricMaterial {
+        bending,
         name: raw.name,
         areal_density: check("areal_density_g_m2", raw.areal_density_g_m2, false)? * 1e-3,
         thickness: check("thickness_mm", raw.thickness_mm, false)? * 1e-3,
         law,
     })
+}
+
+/// The rigidities of a `[bending]` table, or the key at fault and why.
+fn bending(b: RawBending, law: &Orthotropic) -> Result<BendingRigidity, (&'static str, String)> {
+    for (key, v) in [
+        ("warp_n_m", Some(b.warp_n_m)),
+        ("weft_n_m", Some(b.weft_n_m)),
+        ("bias_n_m", b.bias_n_m),
+        ("twist_n_m", b.twist_n_m),
+    ] {
+        if let Some(v) = v {
+            if !(v > 0.0 && v.is_finite() && v < 1e3) {
+                return Err((
+                    key,
+                    format!("[bending] {key} must be a positive rigidity below 1e3 N·m, got {v:?}"),
+                ));
+            }
+        }
+    }
+    let (warp, weft) = (b.warp_n_m, b.weft_n_m);
+    match (b.bias_n_m, b.twist_n_m) {
+        (Some(_), Some(_)) => Err((
+            "twist_n_m",
+            "[bending] give bias_n_m or twist_n_m, not both (each determines the other)".into(),
+        )),
+        (Some(bias), None) => BendingRigidity::from_bias(warp, weft, bias)
+            .map_err(|e| ("bias_n_m", format!("[bending] bias_n_m: {e}"))),
+        (None, Some(twist)) => Ok(BendingRigidity { warp, weft, twist }),
+        (None, None) => BendingRigidity::following(warp, weft, law)
+            .map_err(|e| ("warp_n_m", format!("[bending] warp_n_m: {e}"))),
+    }
 }
 
 /// The material file text of `m` (lab units in the key names, as read by [`parse_material`]),
@@ -357,6 +430,16 @@ pub fn material_toml(m: &FabricMaterial) -> String {
         let _ = writeln!(s, "\n[{name}]    # {what}, degree {}", eta.degree());
         let _ = writeln!(s, "mu = {:?}", eta.mu);
         let _ = writeln!(s, "alpha = {:?}", eta.alpha);
+    }
+    if let Some(b) = &m.bending {
+        let _ = writeln!(
+            s,
+            "\n[bending]    # flexural rigidity per unit width, N·m; bias (45°) beam rigidity {:.6e}",
+            b.at_angle(45.0)
+        );
+        let _ = writeln!(s, "warp_n_m = {:?}", b.warp);
+        let _ = writeln!(s, "weft_n_m = {:?}", b.weft);
+        let _ = writeln!(s, "twist_n_m = {:?}", b.twist);
     }
     let c = &law.cutoffs;
     let bounds = [
@@ -382,6 +465,40 @@ mod tests {
     const GOOD: &str = "name = \"example\"\nareal_density_g_m2 = 103.6\nthickness_mm = 0.18\na11_pa = 2.0e7\na22_pa = 1.5e7\ng12_pa = 1.0e6\n";
 
     #[test]
+    fn bending_tables_are_read_and_checked() {
+        let with = |table: &str| format!("{GOOD}\n[bending]\n{table}");
+        let m = parse_material(
+            &with("warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 3e-6\n"),
+            "m",
+        )
+        .unwrap();
+        let b = m.bending.unwrap();
+        assert!((b.at_angle(45.0) / 3e-6 - 1.0).abs() < 1e-12);
+        // no bias: the twist follows the membrane law (soft in shear here: softer than the mean)
+        let b = parse_material(&with("warp_n_m = 2e-5\nweft_n_m = 6e-6\n"), "m")
+            .unwrap()
+            .bending
+            .unwrap();
+        assert!(b.at_angle(45.0) < 0.5 * (2e-5 + 6e-6));
+        for (table, key) in [
+            ("warp_n_m = -2e-5\nweft_n_m = 6e-6\n", "warp_n_m"),
+            (
+                "warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 1e-4\n",
+                "bias_n_m",
+            ),
+            (
+                "warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 1e-6\ntwist_n_m = 1e-6\n",
+                "twist_n_m",
+            ),
+        ] {
+            let e = parse_material(&with(table), "m").unwrap_err();
+            assert!(e.message.contains(key), "{e}");
+            assert!(e.line.is_some(), "{e}");
+        }
+        assert!(parse_material(&with("warp_n_m = 2e-5\n"), "m").is_err());
+    }
+
+    #[test]
     fn written_materials_read_back_exactly() {
         let mut m = parse_material(GOOD, "m.toml").unwrap();
         m.law.warp = Eta {
@@ -390,6 +507,7 @@ mod tests {
         };
         m.law.cutoffs.e11 = (f64::NEG_INFINITY, 0.0625);
         m.law.cutoffs.e12 = (-0.1, 0.1);
+        m.bending = Some(BendingRigidity::from_bias(2e-5, 6e-6, 3e-6).unwrap());
         let text = material_toml(&m);
         let back = parse_material(&text, "w.toml").unwrap();
         assert_eq!(back, m, "{text}");

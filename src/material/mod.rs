@@ -6,9 +6,11 @@
 //! the material file; the paper's nonlinear η and the parameter derivatives the fitter needs
 //! extend [`Law`].
 
+pub mod bending;
 mod file;
 mod orthotropic;
 
+pub use bending::BendingRigidity;
 pub use file::{
     load_material, material_toml, parse_material, FabricMaterial, MaterialFileError, MODULUS_RANGE,
 };

@@ -106,13 +106,15 @@ fn build_model(
             gauss_points: 4,
         },
     )?;
-    Ok(ShellModel::new(
+    let mut model = ShellModel::new(
         basis,
         warp_direction(angle_deg),
         Arc::new(material.law.clone()),
         material.thickness,
         material.areal_density,
-    )?)
+    )?;
+    model.set_bending(material.bending);
+    Ok(model)
 }
 
 /// How a jaw holds the end of a strip.
@@ -404,6 +406,11 @@ impl StripRig {
         Ok(())
     }
 
+    /// Replaces the bending rigidities (`None`: the paper's section).
+    pub fn set_bending(&mut self, bending: Option<crate::material::BendingRigidity>) {
+        self.model.set_bending(bending);
+    }
+
     /// Restricts the sensitivities to the parameters marked true (law parameters, then
     /// thickness); the others are reported as 0. `None`: all.
     pub fn set_wanted(&mut self, wanted: Option<Vec<bool>>) {
@@ -635,7 +642,11 @@ impl StripRig {
             .iter()
             .enumerate()
             .map(|(j, dg)| {
-                if self.wanted.as_ref().is_some_and(|w| !w[j]) {
+                if self
+                    .wanted
+                    .as_ref()
+                    .is_some_and(|w| w.get(j) != Some(&true))
+                {
                     dq.push(vec![0.0; self.system.num_free]);
                     return 0.0;
                 }
@@ -668,7 +679,8 @@ pub struct BendRig {
     tip: (usize, f64),
 }
 
-/// A bend run with, when asked for, ∂angle/∂k (law parameters, then thickness; degrees).
+/// A bend run with, when asked for, ∂angle/∂k (law parameters, then thickness, then the bending
+/// rigidities when the bending is its own; degrees).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BendPoint {
     pub drape_angle_deg: f64,
@@ -715,6 +727,11 @@ impl BendRig {
         self.model.law = Arc::new(law.clone());
         self.model.set_thickness(thickness)?;
         Ok(())
+    }
+
+    /// Replaces the bending rigidities (`None`: the paper's section).
+    pub fn set_bending(&mut self, bending: Option<crate::material::BendingRigidity>) {
+        self.model.set_bending(bending);
     }
 
     pub fn run(&mut self, sensitivities: bool) -> Result<BendPoint, SceneError> {

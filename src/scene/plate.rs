@@ -61,6 +61,7 @@ impl SquarePlate {
             areal_density: q / g,
             thickness: t,
             law: OrthotropicStvk::isotropic(e, nu).into(),
+            bending: None,
         };
         let rule = match self.support {
             Support::Simple => BoundaryRule::Phantom,

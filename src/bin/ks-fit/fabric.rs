@@ -124,6 +124,29 @@ pub fn cmd_fit(
     for line in shown.iter().chain(&result.notes) {
         println!("{line}");
     }
+    for e in &result.uncertainty {
+        println!(
+            "uncertainty: {} = {:.5e}{} ({}{})",
+            e.name,
+            e.value,
+            e.std_error
+                .map(|s| format!(
+                    " ± {s:.2e} ({:.1} %)",
+                    100.0 * s / e.value.abs().max(1e-300)
+                ))
+                .unwrap_or_default(),
+            match (e.basis, e.determined) {
+                ("none", true) => "as many tests as parameters: no spread to estimate from",
+                ("none", false) => "not estimable",
+                (b, _) => b,
+            },
+            if e.determined {
+                ""
+            } else {
+                "; NOT DETERMINED by the data"
+            }
+        );
+    }
     for line in &result.identifiability {
         println!("identifiability: {line}");
     }
@@ -219,8 +242,17 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
             t.curve.display()
         );
     }
+    let own_bending = data.bend.iter().any(|b| b.angle_deg == 90.0)
+        && data.bend.iter().any(|b| b.angle_deg == 0.0);
+    if own_bending {
+        info.push(
+            "bending: warp and weft bends present: fit fits their flexural rigidities of their own (the default; --bending paper fits one thickness instead)".into(),
+        );
+    }
     for b in &data.bend {
-        let role = if data.known.thickness.is_some() {
+        let role = if own_bending {
+            "fitted: bending rigidity"
+        } else if data.known.thickness.is_some() {
             "predicted: thickness known"
         } else {
             "fitted"

@@ -161,6 +161,12 @@ enum Command {
         /// or adaptive (see `bend --help`).
         #[arg(long, default_value = "full-step")]
         strategy: kshell::solve::Strategy,
+        /// Bending model: `orthotropic` (warp and weft flexural rigidities of their own, fitted
+        /// to the bends, written as the material's [bending] table), `paper` (one thickness:
+        /// bending = τ³/12 × the membrane law, so the warp/weft bending ratio is the tensile
+        /// one) or `auto` (orthotropic when both a warp and a weft bend exist).
+        #[arg(long, value_enum, default_value = "auto")]
+        bending: kshell::fit::BendingMode,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -271,6 +277,7 @@ fn main() -> ExitCode {
             max_error,
             allow_outside,
             strategy,
+            bending,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
@@ -283,7 +290,11 @@ fn main() -> ExitCode {
             nodes,
             max_error,
         )
-        .map(|opts| kshell::fit::FitOptions { strategy, ..opts })
+        .map(|opts| kshell::fit::FitOptions {
+            strategy,
+            bending,
+            ..opts
+        })
         .and_then(|opts| {
             cmd_fit(
                 &file,

@@ -119,7 +119,7 @@ pub struct StudyArgs {
 /// One line describing a solve, for --verbose.
 fn describe(r: &kshell::solve::SolveReport) -> String {
     format!(
-        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {:.1} ms",
+        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {}, {:.1} ms",
         r.iterations,
         r.backward_euler_steps,
         r.fallbacks.indefinite,
@@ -131,6 +131,7 @@ fn describe(r: &kshell::solve::SolveReport) -> String {
         r.residual,
         if r.precision_limited { " (round-off floor)" } else { "" },
         if r.saddle_escapes > 0 { format!(", {} saddle escapes", r.saddle_escapes) } else { String::new() },
+        if r.stable { "stable" } else { "UNSTABLE (a saddle)" },
         r.seconds * 1e3
     )
 }
@@ -209,7 +210,11 @@ pub fn cmd_tensile(
     let mut rig = strip.rig(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
     let (start, mut shown) = (Instant::now(), 0.0);
+    let mut saddles = Vec::new();
     let mut each = |p: &kshell::scene::TensilePoint| {
+        if !p.report.stable {
+            saddles.push(kshell::io::num(p.elongation * 1e3));
+        }
         println!(
             "{},{}",
             kshell::io::num(p.elongation * 1e3),
@@ -234,7 +239,23 @@ pub fn cmd_tensile(
         }
     };
     rig.run_each(false, &mut each).map_err(|e| e.to_string())?;
-    Ok(())
+    unstable_error(
+        "the strip's equilibrium",
+        &saddles,
+        "at elongation(s) {} mm",
+    )
+}
+
+/// Exit 2 naming the saddles a scene ended on (their rows are printed, but they are not states
+/// the fabric can hold: a small disturbance moves it elsewhere).
+fn unstable_error(what: &str, at: &[String], pattern: &str) -> Result<(), String> {
+    if at.is_empty() {
+        return Ok(());
+    }
+    Err(format!(
+        "{what} {} is unstable (a saddle of the energy: the strip buckles or wrinkles there); the printed value is not a stable state's (-v shows each solve)",
+        pattern.replace("{}", &at.join(", "))
+    ))
 }
 
 pub fn cmd_bend(
@@ -269,7 +290,12 @@ pub fn cmd_bend(
     }
     println!("overhang_mm,drape_angle_deg");
     println!("{},{}", overhang, r.drape_angle_deg);
-    Ok(())
+    let saddle = if r.report.stable {
+        vec![]
+    } else {
+        vec![kshell::io::num(overhang)]
+    };
+    unstable_error("the cantilever's equilibrium", &saddle, "at overhang {} mm")
 }
 
 pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {

@@ -1,0 +1,172 @@
+//! Parameter sensitivities of the energy and of its gradient (the right-hand sides of the
+//! fitter's equilibrium derivative, Clyde et al. 2017 Eq. 6), for either section law.
+
+use super::{Sensitivities, ShellModel};
+use crate::material::OutOfDomain;
+use crate::shell::{kinematic_vector, StrainJet, YVec};
+use crate::Vec3;
+use nalgebra::Vector3;
+
+/// Names of the bending rigidities' sensitivities, after the law's and the thickness's.
+pub const BENDING_PARAMS: [&str; 3] = ["bending_warp", "bending_weft", "bending_twist"];
+
+type Jets<'a> = (&'a StrainJet, &'a StrainJet);
+
+impl ShellModel {
+    /// ∂E/∂k and ∂(∂E/∂x)/∂k at `x` for every parameter k of the law, then the thickness
+    /// τ, then (bending of its own only) the rigidities B_warp, B_weft, B_twist: the fitter's
+    /// right-hand sides, paper Eq. 6. With the thickness rule ξ_q = τ t_q / 2,
+    /// w̃_q = τ w_q / 2, the τ-derivative is that of the quadrature actually used:
+    /// ∂/∂τ Σ w̃ ψ(Ẽ_m + ξ Ẽ_b) = Σ (w̃/τ) ψ + Σ w̃ (ξ/τ) S·Ẽ_b.
+    pub fn sensitivities(&self, x: &[Vec3]) -> Result<Sensitivities, OutOfDomain> {
+        self.sensitivities_of(x, None)
+    }
+
+    /// [`ShellModel::sensitivities`] for the parameters marked true only (law parameters, then
+    /// thickness, then rigidities; `None`: all); the others, and any past the mask, are left at zero.
+    pub fn sensitivities_of(
+        &self,
+        x: &[Vec3],
+        wanted: Option<&[bool]>,
+    ) -> Result<Sensitivities, OutOfDomain> {
+        let want = |j: usize| wanted.is_none_or(|w| w.get(j).copied().unwrap_or(false));
+        let mut names = self.law.param_names();
+        let nlaw = names.len();
+        names.push("thickness".into());
+        if self.bending.is_some() {
+            names.extend(BENDING_PARAMS.iter().map(|s| s.to_string()));
+        }
+        let np = names.len();
+        let nn = self.num_nodes();
+        let mut energy = vec![0.0; np];
+        let mut gradient = vec![vec![[0.0; 3]; nn]; np];
+        for q in 0..self.basis.num_points() {
+            let (idx, w) = self.basis.stencil(q);
+            let mut d = [[0.0; 3]; 6];
+            for (&i, wi) in idx.iter().zip(w) {
+                for k in 1..6 {
+                    for c in 0..3 {
+                        d[k][c] += wi[k] * x[i as usize][c];
+                    }
+                }
+            }
+            let y = kinematic_vector(&d);
+            let rest = &self.rest[q];
+            let (m, b) = rest.strains(&y);
+            let da = rest.d_area;
+            let mut dey = vec![0.0; np];
+            let mut dgy = vec![YVec::zeros(); np];
+            if self.bending.is_some() {
+                self.own_bending_terms(&(&m, &b), nlaw, &want, &mut dey, &mut dgy)?;
+            } else {
+                self.paper_section_terms(&(&m, &b), nlaw, &want, &mut dey, &mut dgy)?;
+            }
+            for j in 0..np {
+                if !want(j) {
+                    continue;
+                }
+                energy[j] += da * dey[j];
+                for (&i, wi) in idx.iter().zip(w) {
+                    for k in 0..5 {
+                        for c in 0..3 {
+                            gradient[j][i as usize][c] += da * wi[k + 1] * dgy[j][3 * k + c];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(Sensitivities {
+            names,
+            energy,
+            gradient,
+        })
+    }
+
+    /// One point's terms under the paper's section (law parameters, then τ).
+    fn paper_section_terms(
+        &self,
+        (m, b): &Jets,
+        nlaw: usize,
+        want: &impl Fn(usize) -> bool,
+        dey: &mut [f64],
+        dgy: &mut [YVec],
+    ) -> Result<(), OutOfDomain> {
+        let em = Vector3::from(m.value);
+        let eb = Vector3::from(b.value);
+        let tau = self.thickness;
+        for &(xi, wt) in &self.thickness_rule {
+            let e = em + xi * eb;
+            let r = self.law.response(&e)?;
+            let pr = self.law.param_response(&e)?;
+            // G(ξ)ᵀ v = Σ_k v_k (∇Ẽm_k + ξ ∇Ẽb_k)
+            let gt = |v: &Vector3<f64>| -> YVec {
+                let mut out = YVec::zeros();
+                for k in 0..3 {
+                    out += v[k] * (m.grad[k] + xi * b.grad[k]);
+                }
+                out
+            };
+            for j in 0..nlaw {
+                if want(j) {
+                    dey[j] += wt * pr.dpsi[j];
+                    dgy[j] += wt * gt(&pr.dstress[j]);
+                }
+            }
+            if !want(nlaw) {
+                continue;
+            }
+            let jt = nlaw;
+            dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
+            let mut gb = YVec::zeros();
+            for k in 0..3 {
+                gb += r.stress[k] * b.grad[k];
+            }
+            dgy[jt] += (wt / tau) * gt(&r.stress)
+                + (wt * xi / tau) * gb
+                + (wt * xi / tau) * gt(&(r.tangent * eb));
+        }
+        Ok(())
+    }
+
+    /// One point's terms with bending of its own: W = τ ψ(Ẽ_m) + ½ B_w κ₁₁² + ½ B_f κ₂₂² + B_t κ₁₂².
+    fn own_bending_terms(
+        &self,
+        (m, b): &Jets,
+        nlaw: usize,
+        want: &impl Fn(usize) -> bool,
+        dey: &mut [f64],
+        dgy: &mut [YVec],
+    ) -> Result<(), OutOfDomain> {
+        let em = Vector3::from(m.value);
+        let tau = self.thickness;
+        let gm = |v: &Vector3<f64>| -> YVec {
+            let mut out = YVec::zeros();
+            for k in 0..3 {
+                out += v[k] * m.grad[k];
+            }
+            out
+        };
+        let r = self.law.response(&em)?;
+        let pr = self.law.param_response(&em)?;
+        for j in 0..nlaw {
+            if want(j) {
+                dey[j] += tau * pr.dpsi[j];
+                dgy[j] += tau * gm(&pr.dstress[j]);
+            }
+        }
+        if want(nlaw) {
+            dey[nlaw] += r.psi;
+            dgy[nlaw] += gm(&r.stress);
+        }
+        // ∂W/∂B = (½ κ₁₁², ½ κ₂₂², κ₁₂²); ∂(∂W/∂y)/∂B = (κ₁₁ ∇κ₁₁, κ₂₂ ∇κ₂₂, 2 κ₁₂ ∇κ₁₂)
+        for (k, (scale, dscale)) in [(0.5, 1.0), (0.5, 1.0), (1.0, 2.0)].into_iter().enumerate() {
+            let j = nlaw + 1 + k;
+            if want(j) {
+                let kv = b.value[k];
+                dey[j] += scale * kv * kv;
+                dgy[j] += (dscale * kv) * b.grad[k];
+            }
+        }
+        Ok(())
+    }
+}
