@@ -67,21 +67,27 @@ fn main() {
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
     for f in ["canvas", "cotton", "silk", "denim", "wool"] {
-        let truth = match load_material(&root.join(format!("paper_repro/fabrics/materials/{f}.toml")))
-        {
-            Ok(m) => m,
-            Err(e) => {
-                eprintln!("{e}");
-                continue;
-            }
-        };
+        let truth =
+            match load_material(&root.join(format!("paper_repro/fabrics/materials/{f}.toml"))) {
+                Ok(m) => m,
+                Err(e) => {
+                    eprintln!("{e}");
+                    continue;
+                }
+            };
         let t = determined(&truth);
         let k = truth.thickness.powi(3) / 12.0;
         let upper = (k * truth.law.a11, k * truth.law.a22);
-        for (label, file) in [("default", format!("{f}-fit.toml")), ("paper", format!("{f}-paper-fit.toml"))] {
+        for (label, file) in [
+            ("default", format!("{f}-fit.toml")),
+            ("paper", format!("{f}-paper-fit.toml")),
+        ] {
             let path = root.join("paper_repro/fit_speed").join(&file);
             let Ok(fitted) = load_material(&path) else {
-                eprintln!("missing {}: run paper_repro/fit_speed/run.sh first", path.display());
+                eprintln!(
+                    "missing {}: run paper_repro/fit_speed/run.sh first",
+                    path.display()
+                );
                 continue;
             };
             let d = determined(&fitted);

@@ -75,6 +75,8 @@ pub struct Row {
     pub stable: bool,
     pub saddle_escapes: usize,
     pub seconds: f64,
+    /// A cantilever's drape angle, degrees (the heavy cases' exact answer is 41.4873°).
+    pub drape_angle_deg: Option<f64>,
     /// What happened, in one line: why it failed, or which fallbacks a success needed.
     pub note: String,
 }

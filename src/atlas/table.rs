@@ -75,15 +75,16 @@ pub(super) fn what_happened(row: &Row, solves: &[SolveReport]) -> String {
     }
 }
 
-/// CSV with header `case,method,converged,stable,relative_residual,iterations,backward_euler_steps,refinement_steps,saddle_escapes,seconds,note,factorizations,load_steps`.
+/// CSV with header `case,method,converged,stable,relative_residual,iterations,backward_euler_steps,refinement_steps,saddle_escapes,seconds,note,factorizations,load_steps,drape_angle_deg`
+/// (the last empty for strips).
 pub fn to_csv(rows: &[Row]) -> String {
     let mut s = String::from(
-        "case,method,converged,stable,relative_residual,iterations,backward_euler_steps,refinement_steps,saddle_escapes,seconds,note,factorizations,load_steps\n",
+        "case,method,converged,stable,relative_residual,iterations,backward_euler_steps,refinement_steps,saddle_escapes,seconds,note,factorizations,load_steps,drape_angle_deg\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "\"{}\",\"{}\",{},{},{:e},{},{},{},{},{:.3},\"{}\",{},{}",
+            "\"{}\",\"{}\",{},{},{:e},{},{},{},{},{:.3},\"{}\",{},{},{}",
             r.case.name(),
             r.method,
             r.converged,
@@ -96,7 +97,9 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.seconds,
             r.note.replace('"', "'"),
             r.factorizations,
-            r.load_steps
+            r.load_steps,
+            r.drape_angle_deg
+                .map_or(String::new(), |a| format!("{a:.6}"))
         );
     }
     s
@@ -105,12 +108,12 @@ pub fn to_csv(rows: &[Row]) -> String {
 /// A Markdown table of the same.
 pub fn to_markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "| case | method | converged | stable | relative residual | iterations | factorisations | load steps | backward-Euler steps | refinement steps | saddle escapes | seconds | what happened |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| case | method | converged | stable | relative residual | iterations | factorisations | load steps | backward-Euler steps | refinement steps | saddle escapes | seconds | drape ° | what happened |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.2} | {} | {} |",
             r.case.name(),
             r.method,
             if r.converged { "yes" } else { "**no**" },
@@ -131,6 +134,9 @@ pub fn to_markdown(rows: &[Row]) -> String {
             count(r, r.refinement_steps),
             count(r, r.saddle_escapes),
             r.seconds,
+            r.drape_angle_deg
+                .filter(|_| r.converged)
+                .map_or("–".into(), |a| format!("{a:.4}")),
             r.note.replace('|', "/")
         );
     }
