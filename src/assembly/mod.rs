@@ -892,22 +892,28 @@ impl ShellModel {
         self.bending
     }
 
+    /// The kinematic vector y of Gauss point `q` at positions `x` (its stencil applied to the
+    /// derivatives only).
+    fn kinematics_at(&self, q: usize, x: &[Vec3]) -> YVec {
+        let (idx, w) = self.basis.stencil(q);
+        let mut d = [[0.0; 3]; 6];
+        for (&i, wi) in idx.iter().zip(w) {
+            for k in 1..6 {
+                for c in 0..3 {
+                    d[k][c] += wi[k] * x[i as usize][c];
+                }
+            }
+        }
+        kinematic_vector(&d)
+    }
+
     /// The smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12, warp/weft frame) over the
     /// Gauss points at `x`: what a test actually exercised.
     pub fn membrane_strain_range(&self, x: &[Vec3]) -> ([f64; 3], [f64; 3]) {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for q in 0..self.basis.num_points() {
-            let (idx, w) = self.basis.stencil(q);
-            let mut d = [[0.0; 3]; 6];
-            for (&i, wi) in idx.iter().zip(w) {
-                for k in 1..6 {
-                    for c in 0..3 {
-                        d[k][c] += wi[k] * x[i as usize][c];
-                    }
-                }
-            }
-            let (m, _) = self.rest[q].strain_values(&kinematic_vector(&d));
+            let (m, _) = self.rest[q].strain_values(&self.kinematics_at(q, x));
             for c in 0..3 {
                 lo[c] = lo[c].min(m[c]);
                 hi[c] = hi[c].max(m[c]);

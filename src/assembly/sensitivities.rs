@@ -3,7 +3,7 @@
 
 use super::{Sensitivities, ShellModel};
 use crate::material::OutOfDomain;
-use crate::shell::{kinematic_vector, StrainJet, YVec};
+use crate::shell::{StrainJet, YVec};
 use crate::Vec3;
 use nalgebra::Vector3;
 
@@ -42,15 +42,7 @@ impl ShellModel {
         let mut gradient = vec![vec![[0.0; 3]; nn]; np];
         for q in 0..self.basis.num_points() {
             let (idx, w) = self.basis.stencil(q);
-            let mut d = [[0.0; 3]; 6];
-            for (&i, wi) in idx.iter().zip(w) {
-                for k in 1..6 {
-                    for c in 0..3 {
-                        d[k][c] += wi[k] * x[i as usize][c];
-                    }
-                }
-            }
-            let y = kinematic_vector(&d);
+            let y = self.kinematics_at(q, x);
             let rest = &self.rest[q];
             let (m, b) = rest.strains(&y);
             let da = rest.d_area;

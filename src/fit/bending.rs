@@ -15,7 +15,7 @@ use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::BendTest;
 use crate::material::bending::{bias_ratio, twist_following};
 use crate::material::BendingRigidity;
-use crate::scene::{BendRig, CantileverBend, SceneError};
+use crate::scene::SceneError;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -89,18 +89,7 @@ impl Fitter<'_> {
                 twist: twist_following(w, f, ratio),
             }
         });
-        let mut rigs = Vec::new();
-        for b in bends {
-            let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.mesh = super::thickness::bend_mesh(level, b);
-            bend.solver.rtol = super::FIT_RTOL;
-            bend.solver.strategy = self.opts.strategy;
-            let rig = BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
-                stage: format!("setting up the {}° cantilever", b.angle_deg),
-                source,
-            })?;
-            rigs.push(rig);
-        }
+        let mut rigs = self.bend_rigs(bends, level)?;
         // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
         let n = if off_axis { 3 } else { 2 };
         let rigidity = |q: &[f64]| {

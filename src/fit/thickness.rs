@@ -30,6 +30,27 @@ pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize
 }
 
 impl Fitter<'_> {
+    /// The bend tests' cantilevers on a ladder level, with the current material.
+    pub(super) fn bend_rigs(
+        &self,
+        bends: &[BendTest],
+        level: (usize, usize),
+    ) -> Result<Vec<BendRig>, FitError> {
+        bends
+            .iter()
+            .map(|b| {
+                let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+                bend.mesh = bend_mesh(level, b);
+                bend.solver.rtol = super::FIT_RTOL;
+                bend.solver.strategy = self.opts.strategy;
+                BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
+                    stage: format!("setting up the {}° cantilever", b.angle_deg),
+                    source,
+                })
+            })
+            .collect()
+    }
+
     /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
     pub(super) fn thickness_stage(
         &mut self,
@@ -37,18 +58,7 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<(), FitError> {
         let t0 = Instant::now();
-        let mut rigs = Vec::new();
-        for b in bends {
-            let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.mesh = bend_mesh(level, b);
-            bend.solver.rtol = super::FIT_RTOL;
-            bend.solver.strategy = self.opts.strategy;
-            let rig = BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
-                stage: format!("setting up the {}° cantilever", b.angle_deg),
-                source,
-            })?;
-            rigs.push(rig);
-        }
+        let mut rigs = self.bend_rigs(bends, level)?;
         let (law0, tau0) = (self.law.clone(), self.thickness);
         let scaled = |q: &[f64]| {
             let tau = tau0 * q[0].exp();
