@@ -1,0 +1,447 @@
+//! The ASTM D5035 strip tensile test: [`TensileStrip`] (one run) and [`StripRig`] (set up once,
+//! run again with new material parameters, with force sensitivities: the fitter's forward model).
+
+use super::{
+    build_model, default_mesh, edge_clamp, free_system, positive, spacing, Hold, SceneError,
+};
+use crate::assembly::ShellModel;
+use crate::material::FabricMaterial;
+use crate::solve::{FreeSystem, NewtonOptions, Slave, SolveError, SolveReport};
+use crate::subdiv::BoundaryRule;
+use crate::Vec3;
+use std::sync::Arc;
+
+/// ASTM D5035 strip: width × gauge length, clamped along both ends, one clamp pulled along y.
+#[derive(Clone, Debug)]
+pub struct TensileStrip {
+    /// m
+    pub width: f64,
+    /// gauge length, m
+    pub length: f64,
+    pub angle_deg: f64,
+    pub mesh: (usize, usize),
+    pub boundary: BoundaryRule,
+    pub solver: NewtonOptions,
+}
+
+/// One point of a virtual tensile curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TensilePoint {
+    /// m
+    pub elongation: f64,
+    /// N, the axial clamp reaction
+    pub force: f64,
+    pub report: SolveReport,
+    /// ∂force/∂k (law parameters, then thickness) when asked for, else empty
+    pub dforce: Vec<f64>,
+}
+
+impl TensileStrip {
+    pub fn new(width: f64, length: f64, angle_deg: f64) -> Self {
+        Self {
+            width,
+            length,
+            angle_deg,
+            mesh: default_mesh(width, length),
+            boundary: BoundaryRule::Phantom,
+            solver: NewtonOptions::default(),
+        }
+    }
+
+    /// Forces at each elongation (m, increasing), each solve started from the last equilibrium
+    /// stretched affinely to the new clamp position.
+    pub fn run(
+        &self,
+        material: &FabricMaterial,
+        elongations: &[f64],
+    ) -> Result<Vec<TensilePoint>, SceneError> {
+        self.rig(material, elongations)?.run(false)
+    }
+
+    /// As [`TensileStrip::run`], each point also carrying ∂force/∂k when asked for.
+    pub fn run_with_sensitivities(
+        &self,
+        material: &FabricMaterial,
+        elongations: &[f64],
+        sensitivities: bool,
+    ) -> Result<Vec<TensilePoint>, SceneError> {
+        self.rig(material, elongations)?.run(sensitivities)
+    }
+
+    /// The strip set up once for repeated runs at the same elongations with changing material
+    /// parameters (the fitter's forward model).
+    pub fn rig(
+        &self,
+        material: &FabricMaterial,
+        elongations: &[f64],
+    ) -> Result<StripRig, SceneError> {
+        positive("width", self.width)?;
+        positive("gauge length", self.length)?;
+        if let Some(dl) = elongations.iter().find(|d| !d.is_finite()) {
+            return Err(SceneError::Input(format!(
+                "elongation must be finite, got {dl:?}"
+            )));
+        }
+        let (_, ny) = self.mesh;
+        let model = build_model(
+            material,
+            self.width,
+            self.length,
+            self.angle_deg,
+            self.mesh,
+            self.boundary,
+        )?;
+        let nn = model.num_nodes();
+        let h = spacing(self.width, self.length, self.mesh);
+        let bottom = edge_clamp(&model, self.boundary, self.mesh, h, 0, 1, Hold::Position)?;
+        let top = edge_clamp(
+            &model,
+            self.boundary,
+            self.mesh,
+            h,
+            ny as i64,
+            -1,
+            Hold::Position,
+        )?;
+        let mut fixed = vec![false; 3 * nn];
+        for &d in bottom.fixed.iter().chain(&top.fixed) {
+            fixed[d] = true;
+        }
+        let slaves: Vec<Slave> = bottom.slaves.iter().chain(&top.slaves).cloned().collect();
+        let base: Vec<f64> = slaves.iter().map(|s| s.offset).collect();
+        let rate: Vec<f64> = std::iter::repeat_n(0.0, bottom.slaves.len())
+            .chain(top.offset_rate.iter().copied())
+            .collect();
+        let system = free_system(&model, &fixed, slaves)?;
+        Ok(StripRig {
+            length: self.length,
+            solver: self.solver,
+            model,
+            system,
+            bottom_fixed: bottom.fixed,
+            top_fixed: top.fixed,
+            motion: top.motion,
+            base,
+            rate,
+            elongations: elongations.to_vec(),
+            equilibria: vec![None; elongations.len()],
+            tangents: vec![None; elongations.len()],
+            params: {
+                let mut k = material.law.params();
+                k.push(material.thickness);
+                k
+            },
+            wanted: None,
+            retry_iterations: None,
+        })
+    }
+}
+
+/// Newton iterations a warm-started strip solve may take before it restarts cold.
+const WARM_ITERATIONS: usize = 12;
+
+/// The parameters (law, then thickness) of an equilibrium and ∂q/∂k there, one row per
+/// parameter.
+type ParameterTangent = (Vec<f64>, Vec<Vec<f64>>);
+
+/// A tensile strip ready to be run again and again: model, constraints and the last
+/// equilibrium at every elongation, which warm-starts the next run.
+pub struct StripRig {
+    length: f64,
+    pub solver: NewtonOptions,
+    /// Iterations allowed to the cold solve that follows a failed warm start (`None`: the
+    /// solver's own limit). A fitter probing trial parameters sets a lower one: a trial whose
+    /// equilibrium is that hard to reach is better rejected (its line search steps back) than
+    /// crept up on by hundreds of backward-Euler steps.
+    pub retry_iterations: Option<usize>,
+    model: ShellModel,
+    system: FreeSystem,
+    bottom_fixed: Vec<usize>,
+    top_fixed: Vec<usize>,
+    /// (DOF, rate): the pulled clamp's DOFs and how fast each moves with the elongation
+    motion: Vec<(usize, f64)>,
+    base: Vec<f64>,
+    rate: Vec<f64>,
+    elongations: Vec<f64>,
+    equilibria: Vec<Option<Vec<Vec3>>>,
+    /// per point: the parameters (law, then thickness) of its equilibrium and ∂q/∂k there,
+    /// which predict the equilibrium for new parameters (q + ∂q/∂k Δk)
+    tangents: Vec<Option<ParameterTangent>>,
+    params: Vec<f64>,
+    /// which parameters' sensitivities to compute (all when `None`; the others come back 0)
+    wanted: Option<Vec<bool>>,
+}
+
+impl StripRig {
+    /// Replaces the law and the thickness (the mesh, clamps and warm starts stay).
+    pub fn set_material(
+        &mut self,
+        law: &crate::material::Orthotropic,
+        thickness: f64,
+    ) -> Result<(), SceneError> {
+        self.model.law = Arc::new(law.clone());
+        self.model.set_thickness(thickness)?;
+        self.params = law.params();
+        self.params.push(thickness);
+        Ok(())
+    }
+
+    /// Replaces the bending rigidities (`None`: the paper's section).
+    pub fn set_bending(&mut self, bending: Option<crate::material::BendingRigidity>) {
+        self.model.set_bending(bending);
+    }
+
+    /// Restricts the sensitivities to the parameters marked true (law parameters, then
+    /// thickness); the others are reported as 0. `None`: all.
+    pub fn set_wanted(&mut self, wanted: Option<Vec<bool>>) {
+        self.wanted = wanted;
+    }
+
+    /// Smallest and largest membrane strain (warp/weft frame) of the last run's equilibrium at
+    /// the largest elongation.
+    pub fn strain_range(&self) -> Option<([f64; 3], [f64; 3])> {
+        let x = self.equilibria.last()?.as_ref()?;
+        Some(self.model.membrane_strain_range(x))
+    }
+
+    pub fn elongations(&self) -> &[f64] {
+        &self.elongations
+    }
+
+    /// Takes `other`'s equilibria as this rig's warm starts, where the two rigs share the
+    /// mesh, the clamps and the elongations (strips cut at nearby angles: the angle changes
+    /// only the material frame, not the control net). Returns whether they were taken. The
+    /// parameter tangents are not taken: they belong to the other angle's equilibria.
+    pub fn warm_from(&mut self, other: &StripRig) -> bool {
+        let same = self.elongations == other.elongations
+            && self.length == other.length
+            && self.model.basis.control_points == other.model.basis.control_points
+            && self.bottom_fixed == other.bottom_fixed
+            && self.top_fixed == other.top_fixed;
+        if !same {
+            return false;
+        }
+        for (mine, theirs) in self.equilibria.iter_mut().zip(&other.equilibria) {
+            if mine.is_none() {
+                mine.clone_from(theirs);
+            }
+        }
+        true
+    }
+
+    /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's
+    /// parameters and then the thickness (adjoint form of Clyde et al. 2017, Eq. 6: with
+    /// F = rᵀg(x, k) and K λ = Tᵀ H r, dF/dk = rᵀ ∂g/∂k − λᵀ Tᵀ ∂g/∂k; one solve per point
+    /// whatever the number of parameters).
+    pub fn run(&mut self, sensitivities: bool) -> Result<Vec<TensilePoint>, SceneError> {
+        self.run_each(sensitivities, &mut |_| {})
+    }
+
+    /// As [`StripRig::run`], handing each point to `each` as soon as it is solved (a long
+    /// curve's rows are printed as they come).
+    pub fn run_each(
+        &mut self,
+        sensitivities: bool,
+        each: &mut dyn FnMut(&TensilePoint),
+    ) -> Result<Vec<TensilePoint>, SceneError> {
+        let nn = self.model.num_nodes();
+        let rest = self.model.basis.control_points.clone();
+        let mut grad = vec![[0.0; 3]; nn];
+        let mut out = Vec::with_capacity(self.elongations.len());
+        // the last equilibrium: elongation, positions, and ∂q/∂(elongation) there
+        let mut previous: Option<(f64, Vec<Vec3>, Option<Vec<f64>>)> = None;
+        for i in 0..self.elongations.len() {
+            let dl = self.elongations[i];
+            // predictor: the last equilibrium moved along its tangent to the new jaw position
+            // (Euler continuation on the factorised tangent), or, where there is none (the
+            // first point, an unstable equilibrium), stretched affinely
+            type Last = Option<(f64, Vec<Vec3>, Option<Vec<f64>>)>;
+            let cold = |system: &FreeSystem, previous: &Last| match previous {
+                Some((current, x, Some(slope))) => {
+                    let mut x = x.clone();
+                    let step: Vec<f64> = slope.iter().map(|v| v * (dl - current)).collect();
+                    system.advance(&mut x, &step);
+                    x
+                }
+                _ => {
+                    let (current, mut x) = previous
+                        .as_ref()
+                        .map_or((0.0, rest.clone()), |(c, x, _)| (*c, x.clone()));
+                    let s = (self.length + dl) / (self.length + current);
+                    for p in &mut x {
+                        p[1] *= s;
+                    }
+                    x
+                }
+            };
+            let warm = self.equilibria[i].as_ref().map(|x| {
+                let mut x = x.clone();
+                // first-order predictor along the parameter change
+                if let Some((k0, dq)) = &self.tangents[i] {
+                    if k0.len() == self.params.len() {
+                        let mut d = vec![0.0; self.system.num_free];
+                        for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
+                            let dk = k - k0;
+                            if dk != 0.0 {
+                                d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
+                            }
+                        }
+                        self.system.advance(&mut x, &d);
+                    }
+                }
+                x
+            });
+            let offsets: Vec<f64> = self
+                .base
+                .iter()
+                .zip(&self.rate)
+                .map(|(b, r)| b + r * dl)
+                .collect();
+            self.system.set_offsets(&offsets);
+            let stage = || format!("elongation {:.4} mm", dl * 1e3);
+            let solve = |mut x: Vec<Vec3>, max_iterations: usize| {
+                for &d in &self.bottom_fixed {
+                    x[d / 3][d % 3] = rest[d / 3][d % 3];
+                }
+                for &d in &self.top_fixed {
+                    x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
+                }
+                let opts = NewtonOptions {
+                    max_iterations,
+                    ..self.solver
+                };
+                crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts)
+                    .map(|(report, lin)| (x, report, lin))
+                    .map_err(|source| SceneError::Solve {
+                        stage: stage(),
+                        source,
+                    })
+            };
+            // a warm start that needs many iterations has wandered off (parameters far from
+            // the last run's): give up early and solve from the predictor instead
+            let (x, report, lin) = match warm {
+                Some(x) => match solve(x, self.solver.max_iterations.min(WARM_ITERATIONS)) {
+                    Ok(r) => r,
+                    Err(_) => solve(
+                        cold(&self.system, &previous),
+                        self.retry_iterations
+                            .unwrap_or(self.solver.max_iterations)
+                            .min(self.solver.max_iterations),
+                    )?,
+                },
+                None => solve(cold(&self.system, &previous), self.solver.max_iterations)?,
+            };
+            let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
+                stage: "reaction".into(),
+                source: SolveError::StartOutOfDomain(e.to_string()),
+            };
+            self.model
+                .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
+                .map_err(reaction_error)?;
+            let force: f64 = self
+                .motion
+                .iter()
+                .map(|&(d, r)| r * grad[d / 3][d % 3])
+                .sum();
+            let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
+            let dforce = if sensitivities {
+                let (df, dq) =
+                    self.force_sensitivities(&x, lin)
+                        .map_err(|source| SceneError::Solve {
+                            stage: format!("sensitivities at {}", stage()),
+                            source,
+                        })?;
+                self.tangents[i] = Some((self.params.clone(), dq));
+                df
+            } else {
+                self.tangents[i] = None;
+                Vec::new()
+            };
+            let point = TensilePoint {
+                elongation: dl,
+                force,
+                report,
+                dforce,
+            };
+            each(&point);
+            out.push(point);
+            self.equilibria[i] = Some(x.clone());
+            previous = Some((dl, x, slope));
+        }
+        Ok(out)
+    }
+
+    /// ∂q/∂(elongation) at an equilibrium: with x = T q + x̄ and the jaw's motion u = ∂x̄/∂(dl)
+    /// (the moving clamp's y DOFs, and the slaves' offset rates), K ∂q/∂(dl) = −Tᵀ H u.
+    fn elongation_tangent(&self, lin: &crate::solve::Linearization) -> Vec<f64> {
+        let nn = self.model.num_nodes();
+        let mut u = vec![[0.0; 3]; nn];
+        for &d in &self.top_fixed {
+            if d % 3 == 1 {
+                u[d / 3][1] = 1.0;
+            }
+        }
+        for (s, r) in self.system.slaves().iter().zip(&self.rate) {
+            u[s.dof / 3][s.dof % 3] = *r;
+        }
+        let mut hu = vec![[0.0; 3]; nn];
+        lin.hessian.mul(&u, &mut hu);
+        lin.solve_reduced(&self.system, &hu)
+            .into_iter()
+            .map(|v| -v)
+            .collect()
+    }
+
+    /// ∂F/∂k and ∂q/∂k (reduced) for every parameter.
+    #[allow(clippy::type_complexity)]
+    fn force_sensitivities(
+        &self,
+        x: &[Vec3],
+        lin: Option<crate::solve::Linearization>,
+    ) -> Result<(Vec<f64>, Vec<Vec<f64>>), SolveError> {
+        // an equilibrium that ended unstable (a wrinkling strip's saddle) gets the
+        // sensitivities of a regularised tangent; the point's report says it is not stable
+        let lin = match lin {
+            Some(l) => l,
+            None => crate::solve::Linearization::new_regularized(&self.model, &self.system, x)?.0,
+        };
+        let sens = self
+            .model
+            .sensitivities_of(x, self.wanted.as_deref())
+            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+        let mut r = vec![[0.0; 3]; x.len()];
+        for &(d, c) in &self.motion {
+            r[d / 3][d % 3] += c;
+        }
+        let mut hr = vec![[0.0; 3]; x.len()];
+        lin.hessian.mul(&r, &mut hr);
+        let lambda = lin.solve_reduced(&self.system, &hr);
+        let mut dq = Vec::with_capacity(sens.gradient.len());
+        let df = sens
+            .gradient
+            .iter()
+            .enumerate()
+            .map(|(j, dg)| {
+                if self
+                    .wanted
+                    .as_ref()
+                    .is_some_and(|w| w.get(j) != Some(&true))
+                {
+                    dq.push(vec![0.0; self.system.num_free]);
+                    return 0.0;
+                }
+                let direct: f64 = self.motion.iter().map(|&(d, c)| c * dg[d / 3][d % 3]).sum();
+                let reduced = self.system.reduced(dg);
+                // ∂q/∂k = −K⁻¹ Tᵀ ∂g/∂k, kept for the next run's predictor
+                dq.push(
+                    lin.solve_reduced(&self.system, dg)
+                        .iter()
+                        .map(|v| -v)
+                        .collect(),
+                );
+                direct - lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
+            })
+            .collect();
+        Ok((df, dq))
+    }
+}
