@@ -12,6 +12,15 @@ pub const BENDING_PARAMS: [&str; 3] = ["bending_warp", "bending_weft", "bending_
 
 type Jets<'a> = (&'a StrainJet, &'a StrainJet);
 
+/// Σ_k v_k ∇E_k: a strain-space vector pulled back to y.
+fn pull_back(v: &Vector3<f64>, jet: &StrainJet) -> YVec {
+    let mut out = YVec::zeros();
+    for k in 0..3 {
+        out += v[k] * jet.grad[k];
+    }
+    out
+}
+
 impl ShellModel {
     /// ∂E/∂k and ∂(∂E/∂x)/∂k at `x` for every parameter k of the law, then the thickness
     /// τ, then (bending of its own only) the rigidities B_warp, B_weft, B_twist: the fitter's
@@ -91,13 +100,7 @@ impl ShellModel {
             let r = self.law.response(&e)?;
             let pr = self.law.param_response(&e)?;
             // G(ξ)ᵀ v = Σ_k v_k (∇Ẽm_k + ξ ∇Ẽb_k)
-            let gt = |v: &Vector3<f64>| -> YVec {
-                let mut out = YVec::zeros();
-                for k in 0..3 {
-                    out += v[k] * (m.grad[k] + xi * b.grad[k]);
-                }
-                out
-            };
+            let gt = |v: &Vector3<f64>| pull_back(v, m) + xi * pull_back(v, b);
             for j in 0..nlaw {
                 if want(j) {
                     dey[j] += wt * pr.dpsi[j];
@@ -109,12 +112,8 @@ impl ShellModel {
             }
             let jt = nlaw;
             dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
-            let mut gb = YVec::zeros();
-            for k in 0..3 {
-                gb += r.stress[k] * b.grad[k];
-            }
             dgy[jt] += (wt / tau) * gt(&r.stress)
-                + (wt * xi / tau) * gb
+                + (wt * xi / tau) * pull_back(&r.stress, b)
                 + (wt * xi / tau) * gt(&(r.tangent * eb));
         }
         Ok(())
@@ -131,13 +130,7 @@ impl ShellModel {
     ) -> Result<(), OutOfDomain> {
         let em = Vector3::from(m.value);
         let tau = self.thickness;
-        let gm = |v: &Vector3<f64>| -> YVec {
-            let mut out = YVec::zeros();
-            for k in 0..3 {
-                out += v[k] * m.grad[k];
-            }
-            out
-        };
+        let gm = |v: &Vector3<f64>| pull_back(v, m);
         let r = self.law.response(&em)?;
         let pr = self.law.param_response(&em)?;
         for j in 0..nlaw {
