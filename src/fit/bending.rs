@@ -150,6 +150,14 @@ impl Fitter<'_> {
         let b = rigidity(&p);
         let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
         let values = [b.warp, b.weft, b.twist];
+        if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
+            self.linearised.push(super::mesh_check::Linearised::bends(
+                level,
+                j,
+                &names[..n],
+                &values[..n],
+            ));
+        }
         self.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
             Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
             None => Vec::new(),

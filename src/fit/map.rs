@@ -1,11 +1,44 @@
 //! The map between a stage's variables p and the law (paper §5 stages 2, 3 and 5).
 //!
 //! A stage fits one η and its stiffness c (a11 for warp, a22 for weft, G12 for shear). Its
-//! variables are O(1): ln c (absent when c is known), μ₂…μ_d (μ₁ = 1 − Σ the others) and
-//! β = α x̂ with x̂ the largest tested value of η's argument, so that β ≈ 1 is where η bends.
+//! variables are O(1): ln c (absent when c is known), μ₂…μ_d (μ₁ = 1 − Σ the others) and,
+//! per term, u with β = α x̂ = B tanh(u/B), x̂ the largest tested value of η's argument, so
+//! that β ≈ 1 is where η bends.
+//!
+//! **Bounded exponents.** A term μ(x + 1)^α contributes μ(1 + x)^(α−1) ≈ μ e^(β x/x̂) to η', so
+//! |β| ≤ B = [`BETA_MAX`] = 6 caps how much one term can stiffen (or soften) across the
+//! exercised range at e⁶ ≈ 400×. Fabrics need far less: the bundled materials reach β ≈ 1.6
+//! and the fitted laws before this bound β ≤ 3.2 wherever the term mattered; the degenerate
+//! laws that motivated it (μ = 2.5e-8 with α = 2168, β ≈ 16) fitted a knee at the last
+//! points with a term worth nothing anywhere else and e⁶⁴ at twice the strain. Beyond the
+//! exercised range the fitter's cut-offs carry each term on as its quadratic Taylor
+//! extension, so the law there is finite and its stress linear in strain. The smooth map
+//! keeps the objective differentiable and needs no active set; its slope 1 − (β/B)² is in
+//! [`StageMap::chain`].
+//!
 //! a12 follows its rule ([`A12Rule`]) whenever a11 or a22 changes.
 
 use crate::material::{Eta, Orthotropic};
+
+/// Bound B of every term's β = α x̂ (see the module doc).
+pub const BETA_MAX: f64 = 6.0;
+
+/// The variable u of a term bending at β (β clamped just inside ±B).
+pub fn beta_to_var(beta: f64) -> f64 {
+    let t = (beta / BETA_MAX).clamp(-1.0 + 1e-9, 1.0 - 1e-9);
+    BETA_MAX * t.atanh()
+}
+
+/// β of a term's variable u.
+pub fn var_to_beta(u: f64) -> f64 {
+    BETA_MAX * (u / BETA_MAX).tanh()
+}
+
+/// dβ/du.
+fn dbeta(u: f64) -> f64 {
+    let t = (u / BETA_MAX).tanh();
+    1.0 - t * t
+}
 
 /// Which η and stiffness a stage fits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,6 +113,14 @@ impl StageMap {
         }
     }
 
+    pub fn eta_mut<'a>(&self, law: &'a mut Orthotropic) -> &'a mut Eta {
+        match self.dir {
+            Direction::Warp => &mut law.warp,
+            Direction::Weft => &mut law.weft,
+            Direction::Shear => &mut law.shear,
+        }
+    }
+
     pub fn stiffness(&self, law: &Orthotropic) -> f64 {
         match self.dir {
             Direction::Warp => law.a11,
@@ -95,8 +136,13 @@ impl StageMap {
             p.push(self.stiffness(law).ln());
         }
         p.extend(&eta.mu[1..]);
-        p.extend(eta.alpha.iter().map(|a| a * self.xhat));
+        p.extend(eta.alpha.iter().map(|a| beta_to_var(a * self.xhat)));
         p
+    }
+
+    /// dα/du of the term whose variable is `u`.
+    pub fn dalpha(&self, u: f64) -> f64 {
+        dbeta(u) / self.xhat
     }
 
     pub fn degree(&self, p: &[f64]) -> usize {
@@ -104,14 +150,14 @@ impl StageMap {
     }
 
     /// The variables of degree d + 1 that start exactly at degree d's law `p`: a new term
-    /// with μ = 0 bending at `beta`.
+    /// with μ = 0 bending at `beta` (β, clamped inside the bound).
     pub fn raise(&self, p: &[f64], beta: f64) -> Vec<f64> {
         let o = self.offset();
         let d = self.degree(p);
         let mut q = p[..o + d - 1].to_vec();
         q.push(0.0);
         q.extend(&p[o + d - 1..]);
-        q.push(beta);
+        q.push(beta_to_var(beta));
         q
     }
 
@@ -121,7 +167,10 @@ impl StageMap {
         let mus = &p[o..o + d - 1];
         let mut mu = vec![1.0 - mus.iter().sum::<f64>()];
         mu.extend(mus);
-        let alpha: Vec<f64> = p[o + d - 1..].iter().map(|b| b / self.xhat).collect();
+        let alpha: Vec<f64> = p[o + d - 1..]
+            .iter()
+            .map(|&u| var_to_beta(u) / self.xhat)
+            .collect();
         let eta = Eta { mu, alpha };
         let c = if self.c_known {
             self.stiffness(law)
@@ -182,7 +231,7 @@ impl StageMap {
             out[o + i - 1] = dk[offset + i] - dk[offset];
         }
         for i in 0..d {
-            out[o + d - 1 + i] = dk[offset + d + i] / self.xhat;
+            out[o + d - 1 + i] = dk[offset + d + i] * self.dalpha(p[o + d - 1 + i]);
         }
         out
     }
@@ -240,6 +289,37 @@ mod tests {
                     assert!((va - vb).abs() < 1e-12 * va.abs());
                 }
             }
+        }
+    }
+
+    #[test]
+    fn exponents_stay_bounded_and_their_slope_is_exact() {
+        let map = StageMap {
+            dir: Direction::Warp,
+            xhat: 4e-3,
+            c_known: false,
+            a12: A12Rule::HalfMin,
+        };
+        let mut l = law();
+        // any variables decode to |α x̂| ≤ B, however far the optimiser wanders
+        for u in [-1e3, -20.0, -1.0, 0.0, 3.0, 50.0, 1e6] {
+            map.decode(&[18.0, 0.4, 0.5, u], &mut l);
+            let beta = l.warp.alpha[1] * map.xhat;
+            assert!(beta.abs() <= BETA_MAX, "u = {u}: β = {beta}");
+        }
+        // inside the bound the map is one-to-one
+        for beta in [-5.0, -0.3, 0.0, 1.6, 5.9] {
+            assert!((var_to_beta(beta_to_var(beta)) - beta).abs() < 1e-12);
+        }
+        // dα/du against a central difference
+        for u in [-7.0, -0.5, 0.0, 2.0, 9.0] {
+            let h = 1e-5;
+            let fd = (var_to_beta(u + h) - var_to_beta(u - h)) / (2.0 * h) / map.xhat;
+            let exact = map.dalpha(u);
+            assert!(
+                (fd - exact).abs() < 1e-7 * exact.abs(),
+                "u = {u}: {fd} vs {exact}"
+            );
         }
     }
 }

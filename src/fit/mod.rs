@@ -23,13 +23,20 @@
 //!
 //! Initial guesses and degrees come from the homogeneous-strain strip ([`bootstrap`]); degree
 //! d + 1 starts from degree d's optimum with a new term of zero weight, so it can never end
-//! worse, and is kept only when it lowers the error by the degree gain (30 %): the penalty
-//! for its two extra parameters.
+//! worse, and is kept only when it lowers the shape error by the degree gain (30 %): the
+//! penalty for its two extra parameters. (A likelihood criterion such as BIC would charge
+//! 2 ln n per parameter for n points, a few percent of the error here, but it assumes
+//! independent point errors, and a curve's errors are smooth along it: the 30 % rule charges
+//! what an extra term buys on curves, not on points.) It must also be plausible
+//! ([`plausible`]): exponents bounded, no negligible term, the stress rising over the tested
+//! range; otherwise degree d is kept and the log says why.
 
 mod bending;
 pub mod bootstrap;
 pub mod map;
+mod mesh_check;
 pub mod optim;
+pub mod plausible;
 pub mod preprocess;
 pub mod report;
 mod rigs;
@@ -44,6 +51,7 @@ use crate::material::{BendingRigidity, Cutoffs, Eta, FabricMaterial, Orthotropic
 use crate::scene::{SceneError, StripRig};
 pub use bending::BendingMode;
 use map::{A12Rule, Direction, StageMap};
+pub use mesh_check::MeshCheck;
 use nalgebra::DMatrix;
 use optim::{Evaluation, Method};
 use preprocess::{Prepared, Strip};
@@ -99,6 +107,9 @@ pub struct FitOptions {
     pub strategy: crate::solve::Strategy,
     /// Bending of its own (fitted rigidities) or the paper's one thickness.
     pub bending: BendingMode,
+    /// Estimate how much refining the last mesh level once more would change the fit
+    /// ([`MeshCheck`]): one solve of every fitted test on the finer mesh.
+    pub mesh_check: bool,
 }
 
 impl Default for FitOptions {
@@ -122,6 +133,7 @@ impl Default for FitOptions {
             strategy: crate::solve::Strategy::default(),
             max_error: 0.10,
             bending: BendingMode::Auto,
+            mesh_check: true,
         }
     }
 }
@@ -195,6 +207,8 @@ pub struct FitResult {
     pub tests: Vec<TestOutcome>,
     /// the `max_error` the fit was asked for (the table's `verdict` column reads it)
     pub max_error: f64,
+    /// how much one more mesh refinement would change the fit (`None`: not run)
+    pub mesh_check: Option<MeshCheck>,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -279,6 +293,8 @@ struct Fitter<'a> {
     uncertainty: Vec<(Direction, Vec<f64>, Vec<uncertainty::ParamError>)>,
     /// the thickness or bending stage's standard errors (last level)
     stage_errors: Vec<uncertainty::ParamError>,
+    /// every stage's linearisation at its optimum, for the mesh check
+    linearised: Vec<mesh_check::Linearised>,
     /// strips already set up, warm
     rigs: HashMap<RigKey, StripRig>,
     /// node forces already predicted, by strip and parameter bits
@@ -488,6 +504,7 @@ pub fn fit(
         bending: None,
         uncertainty: Vec::new(),
         stage_errors: Vec::new(),
+        linearised: Vec::new(),
         rigs: Default::default(),
         predictions: Default::default(),
     };
@@ -522,6 +539,21 @@ pub fn fit(
     let tests = validation::outcomes(&mut f, last)?;
     let identifiability = validation::identifiability(&f, &strips);
     let uncertainty = f.final_uncertainty();
+    let mesh_check = if opts.mesh_check {
+        let determined = |name: &str| {
+            uncertainty
+                .iter()
+                .find(|e| e.name == name)
+                .is_none_or(|e| e.determined)
+        };
+        let check = f.mesh_check(last, &determined)?;
+        if let Some(m) = &check {
+            f.mesh_check_notes(last, m);
+        }
+        check
+    } else {
+        None
+    };
     if f.stats.unstable_solves > 0 {
         let n = f.stats.unstable_solves;
         f.notes.push(format!(
@@ -542,5 +574,6 @@ pub fn fit(
         uncertainty,
         tests,
         max_error: opts.max_error,
+        mesh_check,
     })
 }

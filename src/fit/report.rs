@@ -36,6 +36,23 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         r.material.law.weft.degree(),
         r.material.law.shear.degree()
     );
+    if let Some(m) = &r.mesh_check {
+        let _ = writeln!(
+            s,
+            "mesh_change = {:.6}    # largest relative change of a determined parameter if the last mesh were refined once more (first-order refit on {}x{})",
+            m.change, m.mesh.0, m.mesh.1
+        );
+        let _ = writeln!(s, "mesh_change_parameter = {}", toml_str(&m.parameter));
+        let _ = writeln!(s, "mesh_change_curves = {:.6}", m.curve_change);
+        let _ = writeln!(
+            s,
+            "mesh_check_mesh = {}",
+            toml_str(&format!("{}x{}", m.mesh.0, m.mesh.1))
+        );
+        if let Some(a) = m.angle_change_deg {
+            let _ = writeln!(s, "mesh_change_drape_deg = {a:.4}");
+        }
+    }
     let notes: Vec<String> = r.notes.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "notes = [{}]", notes.join(", "));
     let ident: Vec<String> = r.identifiability.iter().map(|n| toml_str(n)).collect();
@@ -64,6 +81,16 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
                 toml_str(e.basis),
                 e.determined
             );
+        }
+    }
+    if let Some(m) = &r.mesh_check {
+        let _ = writeln!(
+            s,
+            "\n[fit.mesh_check]    # relative change of each determined quantity if the last mesh were refined to {}x{} (first-order refit)",
+            m.mesh.0, m.mesh.1
+        );
+        for (name, c) in &m.changes {
+            let _ = writeln!(s, "{name} = {c:.6}");
         }
     }
     let _ = writeln!(s, "\n[fit.stage_seconds]");

@@ -112,6 +112,14 @@ impl Fitter<'_> {
         self.stats.evaluations += evals;
         self.stats.newton_iterations += newton;
         let (law, tau) = scaled(&p);
+        if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
+            self.linearised.push(super::mesh_check::Linearised::bends(
+                level,
+                j,
+                &["thickness_mm"],
+                &[tau * 1e3],
+            ));
+        }
         self.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
             Some((r, j)) => super::uncertainty::log_errors(&["thickness_mm"], &[tau * 1e3], j, r),
             None => Vec::new(),

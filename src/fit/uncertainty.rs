@@ -91,6 +91,48 @@ pub(super) fn covariance(
     }
 }
 
+/// Strains at which [`response_rows`] sample the law: fractions of the largest tested one.
+pub(super) const RESPONSE_AT: [f64; 3] = [0.5, 0.75, 1.0];
+
+/// What a tensile stage's data determine even where μ and α trade off against each other: the
+/// tangent stiffness c·η'(E²) of the stage's term at a few strains E across the tested range
+/// ([`RESPONSE_AT`] of √x̂), named `<dir>_tangent_at_<percent>`, with values and ∂/∂p.
+pub(super) fn response_rows(
+    map: &StageMap,
+    p: &[f64],
+    law: &Orthotropic,
+) -> (Vec<String>, Vec<f64>, DMatrix<f64>) {
+    let o = usize::from(!map.c_known);
+    let d = map.degree(p);
+    let n = p.len();
+    let eta = map.eta(law);
+    let c = map.stiffness(law);
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    let mut dg = DMatrix::zeros(RESPONSE_AT.len(), n);
+    for (k, frac) in RESPONSE_AT.iter().enumerate() {
+        let x = frac * frac * map.xhat;
+        let slope = eta.eval(x).map_or(f64::NAN, |v| v[1]);
+        names.push(format!(
+            "{}_tangent_at_{:.0}pct",
+            map.dir.name(),
+            100.0 * frac
+        ));
+        values.push(c * slope);
+        let dp = eta.param_derivs(x);
+        if o == 1 {
+            dg[(k, 0)] = c * slope;
+        }
+        for i in 1..d {
+            dg[(k, o + i - 1)] = c * (dp[i][1] - dp[0][1]);
+        }
+        for i in 0..d {
+            dg[(k, o + d - 1 + i)] = c * dp[d + i][1] * map.dalpha(p[o + d - 1 + i]);
+        }
+    }
+    (names, values, dg)
+}
+
 /// Standard errors of y = g(p) with Jacobian `dg` (rows: outputs) from Cov(p).
 pub(super) fn propagate(dg: &DMatrix<f64>, cov: &DMatrix<f64>) -> Vec<f64> {
     let c = dg * cov * dg.transpose();
@@ -112,6 +154,37 @@ pub(super) fn stage_errors(
     lens: &[usize],
     law: &Orthotropic,
 ) -> Vec<ParamError> {
+    let (names, values, dg) = physical_rows(map, p, law);
+    let cov = covariance(j, r, lens);
+    let ses = cov.as_ref().map(|(c, _)| propagate(&dg, c));
+    let basis = cov.as_ref().map_or("none", |c| c.1);
+    (0..names.len())
+        .map(|k| {
+            // μ₁ of a degree-1 law is 1 by definition: nothing to estimate
+            let fixed = dg.row(k).iter().all(|v| *v == 0.0);
+            let se = if fixed {
+                Some(0.0)
+            } else {
+                ses.as_ref().map(|s| s[k])
+            };
+            ParamError {
+                name: names[k].clone(),
+                value: values[k],
+                std_error: se,
+                basis: if fixed { "exact" } else { basis },
+                determined: fixed || determined(values[k], se),
+            }
+        })
+        .collect()
+}
+
+/// A tensile stage's physical parameters (its stiffness unless known, then η's μ and α):
+/// their material-file names, values and Jacobian ∂(parameter)/∂p at `p`.
+pub(super) fn physical_rows(
+    map: &StageMap,
+    p: &[f64],
+    law: &Orthotropic,
+) -> (Vec<String>, Vec<f64>, DMatrix<f64>) {
     let (c_name, eta_name) = match map.dir {
         Direction::Warp => ("a11_pa", "warp"),
         Direction::Weft => ("a22_pa", "weft"),
@@ -151,30 +224,10 @@ pub(super) fn stage_errors(
     for i in 0..d {
         names.push(format!("{eta_name}_alpha_{}", i + 1));
         values.push(eta.alpha[i]);
-        rows.push(unit(o + d - 1 + i, 1.0 / map.xhat));
+        rows.push(unit(o + d - 1 + i, map.dalpha(p[o + d - 1 + i])));
     }
     let dg = DMatrix::from_fn(rows.len(), n, |a, b| rows[a][b]);
-    let cov = covariance(j, r, lens);
-    let ses = cov.as_ref().map(|(c, _)| propagate(&dg, c));
-    let basis = cov.as_ref().map_or("none", |c| c.1);
-    (0..names.len())
-        .map(|k| {
-            // μ₁ of a degree-1 law is 1 by definition: nothing to estimate
-            let fixed = rows[k].iter().all(|v| *v == 0.0);
-            let se = if fixed {
-                Some(0.0)
-            } else {
-                ses.as_ref().map(|s| s[k])
-            };
-            ParamError {
-                name: names[k].clone(),
-                value: values[k],
-                std_error: se,
-                basis: if fixed { "exact" } else { basis },
-                determined: fixed || determined(values[k], se),
-            }
-        })
-        .collect()
+    (names, values, dg)
 }
 
 /// Parameters fitted as logarithms (the thickness, the bending rigidities): `values[k]` =

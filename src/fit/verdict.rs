@@ -206,6 +206,7 @@ mod tests {
             uncertainty: Vec::new(),
             tests,
             max_error: 0.1,
+            mesh_check: None,
         }
     }
 

@@ -87,7 +87,7 @@ impl Eta {
     }
 
     /// (∂η, ∂η', ∂η'') with respect to each μᵢ, then each αᵢ.
-    fn param_derivs(&self, x: f64) -> Vec<[f64; 3]> {
+    pub(crate) fn param_derivs(&self, x: f64) -> Vec<[f64; 3]> {
         let b = x + 1.0;
         let lb = x.ln_1p();
         let mut dmu = Vec::with_capacity(self.degree());

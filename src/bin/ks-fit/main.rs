@@ -167,6 +167,11 @@ enum Command {
         /// one) or `auto` (orthotropic when both a warp and a weft bend exist).
         #[arg(long, value_enum, default_value = "auto")]
         bending: kshell::fit::BendingMode,
+        /// Skip the mesh check (one solve of every fitted test on a mesh twice as fine as the
+        /// last level, to estimate how much refining would change the fit: `[fit]`
+        /// mesh_change).
+        #[arg(long)]
+        no_mesh_check: bool,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -278,6 +283,7 @@ fn main() -> ExitCode {
             allow_outside,
             strategy,
             bending,
+            no_mesh_check,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
@@ -293,6 +299,7 @@ fn main() -> ExitCode {
         .map(|opts| kshell::fit::FitOptions {
             strategy,
             bending,
+            mesh_check: !no_mesh_check,
             ..opts
         })
         .and_then(|opts| {

@@ -1,0 +1,423 @@
+//! The mesh check: how much the fitted parameters and curves would change if the last mesh
+//! level were refined once more (issue "a material you can trust", item 1; `[fit]`
+//! `mesh_change`).
+//!
+//! Refitting on the finer mesh would cost the whole last level again, several times over. The
+//! check instead takes one Gauss–Newton step of that refit from the fitted parameters, stage
+//! by stage, as the fit itself is staged: every fitted strip and bend is solved once on the
+//! finer mesh at the fitted material, giving the change Δr of the stage's residuals r (the
+//! weighted relative force errors, or the relative drape-angle errors) that the refinement
+//! causes; at the optimum Jᵀr = 0, so the refit moves the stage's variables by
+//!
+//! δ = −(JᵀJ)⁻¹ Jᵀ Δr
+//!
+//! to first order, with J the stage's Jacobian at the optimum (already computed for the
+//! standard errors), and the physical parameters by G δ (G = their Jacobian in the variables).
+//! The fitted curves then change by Δr + J δ (relative, per point, unweighted). This is the
+//! defect correction of multigrid read backwards: the fine level's defect Δr, carried into the
+//! coarse level's linearisation. It is exact for a linear model and, like any first-order
+//! estimate, trustworthy while the change is small, which is the case it is there to certify;
+//! a large estimate says "refine", whatever its exact size.
+//!
+//! `mesh_change` is the largest relative change of a parameter the data determine (see
+//! [`super::uncertainty`]): an undetermined exponent can move by any amount without any curve
+//! noticing, and the curves' change says that.
+
+use super::{FitError, Fitter};
+use crate::material::BendingRigidity;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// What a stage fitted, for the check.
+#[derive(Clone, Debug)]
+pub(super) enum Probe {
+    /// a tensile stage over these strips (each strip's used curves, in order)
+    Tensile(Vec<usize>),
+    /// the thickness or bending stage over the bend tests
+    Bends,
+}
+
+/// A stage's linearisation at its optimum.
+#[derive(Clone, Debug)]
+pub(super) struct Linearised {
+    pub probe: Probe,
+    /// the stage's direction (tensile) or `None` (bends)
+    pub dir: Option<super::map::Direction>,
+    pub level: (usize, usize),
+    /// ∂r/∂p
+    pub j: DMatrix<f64>,
+    /// points per curve (one per bend)
+    pub lens: Vec<usize>,
+    /// the physical parameters (then, for a tensile stage, its law's tangent stiffness
+    /// across the tested range), their values and ∂/∂p
+    pub names: Vec<String>,
+    pub values: Vec<f64>,
+    pub dg: DMatrix<f64>,
+    /// which of them `mesh_change` covers: not η's μ and α one by one, which trade off
+    /// against each other where only their sum is tested (the tangents cover them)
+    pub counts: Vec<bool>,
+}
+
+impl Linearised {
+    /// A tensile stage's, at its optimum `p`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn tensile(
+        map: &super::map::StageMap,
+        p: &[f64],
+        law: &crate::material::Orthotropic,
+        strips: &[usize],
+        level: (usize, usize),
+        j: &DMatrix<f64>,
+        lens: &[usize],
+    ) -> Self {
+        let (mut names, mut values, dg) = super::uncertainty::physical_rows(map, p, law);
+        let (rn, rv, rg) = super::uncertainty::response_rows(map, p, law);
+        let mut counts: Vec<bool> = names.iter().map(|n| n.ends_with("_pa")).collect();
+        counts.extend(rn.iter().map(|_| true));
+        names.extend(rn);
+        values.extend(rv);
+        let mut all = DMatrix::zeros(dg.nrows() + rg.nrows(), dg.ncols());
+        all.rows_mut(0, dg.nrows()).copy_from(&dg);
+        all.rows_mut(dg.nrows(), rg.nrows()).copy_from(&rg);
+        Self {
+            probe: Probe::Tensile(strips.to_vec()),
+            dir: Some(map.dir),
+            level,
+            j: j.clone(),
+            lens: lens.to_vec(),
+            names,
+            values,
+            dg: all,
+            counts,
+        }
+    }
+
+    /// The thickness or bending stage's: parameters fitted as logarithms.
+    pub fn bends(level: (usize, usize), j: &DMatrix<f64>, names: &[&str], values: &[f64]) -> Self {
+        Self {
+            probe: Probe::Bends,
+            dir: None,
+            level,
+            j: j.clone(),
+            lens: vec![1; j.nrows()],
+            names: names.iter().map(|n| n.to_string()).collect(),
+            values: values.to_vec(),
+            dg: DMatrix::from_diagonal(&DVector::from_column_slice(values)),
+            counts: vec![true; values.len()],
+        }
+    }
+}
+
+/// The check's outcome.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshCheck {
+    /// the finer mesh the check solved on (of a 50 × 75 mm strip)
+    pub mesh: (usize, usize),
+    /// largest relative change of a determined stiffness, thickness, rigidity or tangent
+    /// stiffness of the law across the tested range, and its name
+    pub change: f64,
+    pub parameter: String,
+    /// every counted quantity's signed relative change
+    pub changes: Vec<(String, f64)>,
+    /// largest relative change of η's μ and α one by one (not part of `change`), and which
+    pub law_change: f64,
+    pub law_parameter: String,
+    /// largest mean relative change of a fitted curve, and which (file name)
+    pub curve_change: f64,
+    pub curve: String,
+    /// largest change of a fitted drape angle after the refit, degrees (bends only)
+    pub angle_change_deg: Option<f64>,
+}
+
+/// δ = −(JᵀJ)⁻¹ Jᵀ Δr, or `None` where JᵀJ is singular.
+fn gauss_newton_step(j: &DMatrix<f64>, dr: &[f64]) -> Option<DVector<f64>> {
+    let dr = DVector::from_column_slice(dr);
+    let jtj = j.transpose() * j;
+    let rhs = -(j.transpose() * dr);
+    jtj.cholesky().map(|c| c.solve(&rhs))
+}
+
+impl Fitter<'_> {
+    /// The tensile stages' latest linearisations at the law's final degrees, then the bend
+    /// stage's, all on `level`.
+    fn final_linearisations(&self, level: (usize, usize)) -> Vec<Linearised> {
+        use super::map::Direction;
+        let mut out = Vec::new();
+        for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
+            let degree = match dir {
+                Direction::Warp => self.law.warp.degree(),
+                Direction::Weft => self.law.weft.degree(),
+                Direction::Shear => self.law.shear.degree(),
+            };
+            let found = self.linearised.iter().rev().find(|l| {
+                l.dir == Some(dir)
+                    && l.level == level
+                    && l.names.iter().filter(|n| n.contains("_alpha_")).count() == degree
+            });
+            out.extend(found.cloned());
+        }
+        let bends = self.linearised.iter().rev();
+        out.extend(
+            bends
+                .filter(|l| matches!(l.probe, Probe::Bends) && l.level == level)
+                .take(1)
+                .cloned(),
+        );
+        out
+    }
+
+    /// Drape angles of every bend test on `level` at the current material.
+    fn drape_angles(&mut self, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
+        let data = self.data;
+        let mut rigs = self.bend_rigs(&data.bend, level)?;
+        let (law, tau, bending): (_, _, Option<BendingRigidity>) =
+            (self.law.clone(), self.thickness, self.bending);
+        let runs: Vec<_> = rigs
+            .par_iter_mut()
+            .map(|rig| {
+                rig.set_material(&law, tau)?;
+                rig.set_bending(bending);
+                rig.run(false).map(|p| p.drape_angle_deg)
+            })
+            .collect();
+        self.stats.evaluations += runs.len();
+        runs.into_iter()
+            .collect::<Result<Vec<f64>, _>>()
+            .map_err(|source| FitError::Scene {
+                stage: format!("mesh check: the cantilevers on {}×{}", level.0, level.1),
+                source,
+            })
+    }
+
+    /// The mesh check of the fit on `last` (see the module doc); `determined` says which
+    /// parameters count.
+    pub(super) fn mesh_check(
+        &mut self,
+        last: (usize, usize),
+        determined: &dyn Fn(&str) -> bool,
+    ) -> Result<Option<MeshCheck>, FitError> {
+        let lins = self.final_linearisations(last);
+        if lins.is_empty() {
+            return Ok(None);
+        }
+        let finer = (2 * last.0, 2 * last.1);
+        self.say(&format!(
+            "mesh check: every fitted strip and bend again on {}x{}",
+            finer.0, finer.1
+        ));
+        let mut out = MeshCheck {
+            mesh: finer,
+            change: 0.0,
+            parameter: String::new(),
+            changes: Vec::new(),
+            law_change: 0.0,
+            law_parameter: String::new(),
+            curve_change: 0.0,
+            curve: String::new(),
+            angle_change_deg: None,
+        };
+        // (name, relative change, counted in `change`)
+        let mut changes: Vec<(String, f64, bool)> = Vec::new();
+        for lin in &lins {
+            let (dr, labels, scale) = match &lin.probe {
+                Probe::Tensile(strips) => self.tensile_defect(strips, last, finer)?,
+                Probe::Bends => {
+                    let coarse = self.bend_angles.clone();
+                    let fine = self.drape_angles(finer)?;
+                    let targets: Vec<f64> =
+                        self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
+                    let mut dr: Vec<f64> = (0..fine.len())
+                        .map(|k| (fine[k] - coarse[k]) / targets[k])
+                        .collect();
+                    if lin.names == ["thickness_mm"] {
+                        // the paper's section: a bend's rigidity is (a·τ)·τ²/12, and the tensile
+                        // stages move a·τ; J is ∂r/∂ln τ at fixed a·τ, i.e. 2 ∂r/∂ln B
+                        let of =
+                            |key: &str| changes.iter().find(|c| c.0 == key).map_or(0.0, |c| c.1);
+                        let (warp, weft) = (of("a11_pa"), of("a22_pa"));
+                        for (k, b) in self.data.bend.iter().enumerate().take(dr.len()) {
+                            let m = if (b.angle_deg - 90.0).abs() < 1e-9 {
+                                warp
+                            } else if b.angle_deg.abs() < 1e-9 {
+                                weft
+                            } else {
+                                0.5 * (warp + weft)
+                            };
+                            dr[k] += 0.5 * lin.j[(k, 0)] * m;
+                        }
+                    }
+                    let labels = self
+                        .data
+                        .bend
+                        .iter()
+                        .map(|b| format!("bend {}°", b.angle_deg));
+                    (dr, labels.collect(), targets)
+                }
+            };
+            if dr.len() != lin.j.nrows() {
+                continue;
+            }
+            let Some(delta) = gauss_newton_step(&lin.j, &dr) else {
+                continue;
+            };
+            let dphys = &lin.dg * &delta;
+            for (k, name) in lin.names.iter().enumerate() {
+                let rel = dphys[k] / lin.values[k];
+                let counted = lin.counts[k] && determined(name);
+                if rel.is_finite() && (counted || !lin.counts[k]) {
+                    changes.push((name.clone(), rel, lin.counts[k]));
+                }
+            }
+            // the curves after the refit: Δr + J δ, unweighted, curve by curve
+            let after = DVector::from_column_slice(&dr) + &lin.j * &delta;
+            let mut k = 0;
+            for (c, &n) in lin.lens.iter().enumerate() {
+                let w = match lin.probe {
+                    Probe::Tensile(_) => 1.0 / (n as f64).sqrt(),
+                    Probe::Bends => 1.0,
+                };
+                let mean = after.rows(k, n).iter().map(|v| v.abs()).sum::<f64>() / (w * n as f64);
+                match lin.probe {
+                    Probe::Tensile(_) if mean > out.curve_change => {
+                        out.curve_change = mean;
+                        out.curve = labels[c].clone();
+                    }
+                    Probe::Bends => {
+                        let deg = mean * scale[c];
+                        let a = out.angle_change_deg.get_or_insert(0.0);
+                        *a = a.max(deg);
+                    }
+                    _ => {}
+                }
+                k += n;
+            }
+        }
+        // the thickness stage rescales every membrane stiffness by τ⁰/τ (a·τ kept): to first
+        // order their relative changes lose the thickness's
+        let tau = changes
+            .iter()
+            .find(|c| c.0 == "thickness_mm")
+            .map_or(0.0, |c| c.1);
+        for (name, rel, counted) in changes {
+            let rel = if name.ends_with("_pa") || name.contains("_tangent_at_") {
+                rel - tau
+            } else {
+                rel
+            };
+            if counted && rel.abs() > out.change {
+                out.change = rel.abs();
+                out.parameter = name.clone();
+            }
+            if !counted && rel.abs() > out.law_change {
+                out.law_change = rel.abs();
+                out.law_parameter = name.clone();
+            }
+            out.changes.push((name, rel));
+        }
+        Ok(Some(out))
+    }
+
+    /// The check's line in the notes, a warning when the fit is not mesh-independent (a
+    /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
+    pub(super) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
+        let bad = m.change >= 0.01
+            || m.curve_change >= 3e-3
+            || m.angle_change_deg.is_some_and(|a| a >= 0.1);
+        let law = if m.law_change >= 0.01 {
+            format!(
+                "; η's weights and exponents one by one by up to {:.0} % ({}), which the curves do not pin down",
+                100.0 * m.law_change,
+                m.law_parameter
+            )
+        } else {
+            String::new()
+        };
+        let angles = m
+            .angle_change_deg
+            .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
+        let line = format!(
+            "{}mesh check: refining {}x{} to {}x{} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit){law}",
+            if bad { "warning: " } else { "" },
+            last.0,
+            last.1,
+            m.mesh.0,
+            m.mesh.1,
+            if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
+            100.0 * m.change,
+            100.0 * m.curve_change,
+            if m.curve.is_empty() { "-" } else { &m.curve },
+        );
+        let line = if bad {
+            format!("{line}: the fit is not mesh-independent; add the finer level (--mesh-ladder)")
+        } else {
+            line
+        };
+        let each: Vec<String> = m
+            .changes
+            .iter()
+            .map(|(n, c)| format!("{n} {:+.2} %", 100.0 * c))
+            .collect();
+        self.say(&format!("mesh check, each change: {}", each.join(", ")));
+        self.say(&line);
+        self.notes.push(line);
+    }
+
+    /// Δr of the tensile residuals over `strips` from `last` to `finer` at the fitted
+    /// material, with a label per curve and the curves' point counts.
+    #[allow(clippy::type_complexity)]
+    fn tensile_defect(
+        &mut self,
+        strips: &[usize],
+        last: (usize, usize),
+        finer: (usize, usize),
+    ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
+        let jobs: Vec<(usize, f64)> = strips
+            .iter()
+            .map(|&s| (s, self.prep.strips[s].angle_deg))
+            .collect();
+        let coarse = self.predict_many(&jobs, last)?;
+        let fine = self.predict_many(&jobs, finer)?;
+        let (mut dr, mut labels) = (Vec::new(), Vec::new());
+        for (i, &s) in strips.iter().enumerate() {
+            for c in self.used_curves(&[s]) {
+                let (a, b) = (
+                    self.curve_forces(c, &coarse[i]),
+                    self.curve_forces(c, &fine[i]),
+                );
+                let points = &self.prep.curves[c].points;
+                let w = 1.0 / (points.len() as f64).sqrt();
+                for ((m, fa), fb) in points.iter().zip(&a).zip(&b) {
+                    dr.push(w * (fb - fa) / m.1);
+                }
+                let test = self.prep.curves[c].test;
+                labels.push(self.data.tensile[test].curve.display().to_string());
+            }
+        }
+        Ok((dr, labels, Vec::new()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// For a model linear in its parameters the step is the exact refit: r(p) = A p − b on
+    /// the coarse mesh and A p − b′ on the fine one, optimum moves by (AᵀA)⁻¹Aᵀ(b′ − b).
+    #[test]
+    fn the_step_is_the_exact_refit_of_a_linear_model() {
+        let a = DMatrix::from_row_slice(4, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0]);
+        let b = DVector::from_column_slice(&[0.1, 1.2, 1.9, 3.2]);
+        let b2 = DVector::from_column_slice(&[0.15, 1.22, 1.97, 3.3]);
+        let solve = |rhs: &DVector<f64>| {
+            (a.transpose() * &a)
+                .cholesky()
+                .unwrap()
+                .solve(&(a.transpose() * rhs))
+        };
+        let (p, p2) = (solve(&b), solve(&b2));
+        // Δr at fixed p: (A p − b′) − (A p − b) = b − b′
+        let dr: Vec<f64> = (&b - &b2).iter().copied().collect();
+        let delta = gauss_newton_step(&a, &dr).unwrap();
+        assert!((&p + &delta - &p2).norm() < 1e-12);
+    }
+}

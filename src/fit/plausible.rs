@@ -1,0 +1,116 @@
+//! Laws the data determine and that behave: the checks every fitted η passes (issue "a
+//! material you can trust", item 2).
+//!
+//! - **Bounded exponents**: |α x̂| ≤ [`BETA_MAX`](super::map::BETA_MAX), built into the stage
+//!   variables ([`super::map`]).
+//! - **Negligible terms are dropped.** A term's share of η'(x) = Σ μᵢ(1 + x)^(αᵢ−1) over the
+//!   exercised range [0, x̂] is at most |μᵢ| max(1, (1 + x̂)^(αᵢ−1)). Below [`NEGLIGIBLE`] (0.1 %
+//!   of η'(0) = 1) the term changes no force by more than about that much, and a weight that
+//!   small cannot be told from zero by curves that scatter by a percent: it is removed and its
+//!   weight given to the largest term, so that Σμ = 1 (η'(0) = 1) still holds.
+//! - **Rising stress**: the stress σ(E) = c η'(E²) E must rise wherever the law is its own
+//!   (the material reader refuses a law whose stress falls inside its cut-offs, since a
+//!   falling branch has no stable equilibrium). A higher degree whose stress peaks inside the
+//!   exercised range is refused; if the kept law's still does, its cut-off is moved below the
+//!   peak, so that past it the law continues on its rising tangent, with a note.
+
+use crate::material::Eta;
+
+/// Largest share of η' a term may have over the exercised range and still be dropped.
+pub const NEGLIGIBLE: f64 = 1e-3;
+
+/// A term's largest share of η' over x ∈ [0, x̂].
+fn share(mu: f64, alpha: f64, xhat: f64) -> f64 {
+    mu.abs() * ((alpha - 1.0) * xhat.ln_1p()).exp().max(1.0)
+}
+
+/// Indices of the terms negligible over [0, x̂] (never all of them: the largest stays).
+pub fn negligible_terms(eta: &Eta, xhat: f64) -> Vec<usize> {
+    let shares: Vec<f64> = (0..eta.degree())
+        .map(|i| share(eta.mu[i], eta.alpha[i], xhat))
+        .collect();
+    let largest = (0..shares.len())
+        .max_by(|&a, &b| shares[a].total_cmp(&shares[b]))
+        .unwrap_or(0);
+    (0..shares.len())
+        .filter(|&i| i != largest && shares[i] < NEGLIGIBLE)
+        .collect()
+}
+
+/// Drops η's negligible terms (their weight goes to the largest term); returns how many.
+pub fn drop_negligible(eta: &mut Eta, xhat: f64) -> usize {
+    let gone = negligible_terms(eta, xhat);
+    if gone.is_empty() {
+        return 0;
+    }
+    let moved: f64 = gone.iter().map(|&i| eta.mu[i]).sum();
+    let keep: Vec<usize> = (0..eta.degree()).filter(|i| !gone.contains(i)).collect();
+    let mut mu: Vec<f64> = keep.iter().map(|&i| eta.mu[i]).collect();
+    let alpha: Vec<f64> = keep.iter().map(|&i| eta.alpha[i]).collect();
+    let big = (0..mu.len())
+        .max_by(|&a, &b| mu[a].abs().total_cmp(&mu[b].abs()))
+        .unwrap_or(0);
+    mu[big] += moved;
+    *eta = Eta { mu, alpha };
+    gone.len()
+}
+
+/// The strain in (0, `e_max`] where η's stress stops rising, if it does (see
+/// [`Eta::stress_peak`]).
+pub fn stress_peak(eta: &Eta, e_max: f64) -> Option<f64> {
+    (e_max > 0.0).then(|| eta.stress_peak(e_max)).flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tiny_weight_with_a_huge_exponent_is_not_negligible_but_a_tiny_share_is() {
+        let xhat = 6.6e-3;
+        // μ = 2.5e-8, α = 2168 (a degenerate fitted warp law): 4 % of η' at x̂
+        let knee = Eta {
+            mu: vec![1.0 - 2.5e-8, 2.5e-8],
+            alpha: vec![78.0, 2168.0],
+        };
+        assert!(negligible_terms(&knee, xhat).is_empty());
+        // μ = 1e-4 bending gently: 1e-4 × e^0.5 of η' at most
+        let mut small = Eta {
+            mu: vec![0.7, 1e-4, 0.3 - 1e-4],
+            alpha: vec![1.0, 75.0, 150.0],
+        };
+        assert_eq!(negligible_terms(&small, xhat), vec![1]);
+        let before: Vec<f64> = [1e-3, 3e-3, xhat]
+            .iter()
+            .map(|&x| small.eval(x).unwrap()[1])
+            .collect();
+        assert_eq!(drop_negligible(&mut small, xhat), 1);
+        assert_eq!(small.degree(), 2);
+        assert!((small.mu.iter().sum::<f64>() - 1.0).abs() < 1e-15);
+        // η' moves by about the dropped share at most
+        for (x, b) in [1e-3, 3e-3, xhat].iter().zip(before) {
+            let after = small.eval(*x).unwrap()[1];
+            assert!((after - b).abs() <= 2.0 * NEGLIGIBLE * b, "x = {x}");
+        }
+        // the largest term always stays
+        let mut one = Eta {
+            mu: vec![1.0],
+            alpha: vec![1.0],
+        };
+        assert_eq!(drop_negligible(&mut one, xhat), 0);
+    }
+
+    #[test]
+    fn stress_peaks_are_found_inside_the_range_only() {
+        // σ ∝ (1 + E²)^(α−1) E with α = −100: dσ/dE = 0 where 1 + (2α − 1)E² = 0
+        let soft = Eta {
+            mu: vec![1.0],
+            alpha: vec![-100.0],
+        };
+        let peak = (1.0f64 / 201.0).sqrt();
+        let found = stress_peak(&soft, 0.2).expect("a peak at E ≈ 0.0705");
+        assert!((found - peak).abs() < 1e-6 * peak, "{found} vs {peak}");
+        assert_eq!(stress_peak(&soft, 0.9 * peak), None);
+        assert_eq!(stress_peak(&Eta::linear(), 1.0), None);
+    }
+}
