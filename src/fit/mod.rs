@@ -539,6 +539,8 @@ pub fn fit(
     let tests = validation::outcomes(&mut f, last)?;
     let identifiability = validation::identifiability(&f, &strips);
     let uncertainty = f.final_uncertainty();
+    f.time_stage("report", t0);
+    let t0 = Instant::now();
     let mesh_check = if opts.mesh_check {
         let determined = |name: &str| {
             uncertainty
@@ -550,10 +552,12 @@ pub fn fit(
         if let Some(m) = &check {
             f.mesh_check_notes(last, m);
         }
+        f.time_stage("mesh check", t0);
         check
     } else {
         None
     };
+    let t0 = Instant::now();
     if f.stats.unstable_solves > 0 {
         let n = f.stats.unstable_solves;
         f.notes.push(format!(
