@@ -28,6 +28,24 @@ use crate::material::BendingRigidity;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
+/// Where the check solves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum MeshCheckMode {
+    /// no check
+    Off,
+    /// on the mesh half as fine as the last level, the defect carried to the next finer
+    /// mesh at the order [`ORDER`]: Δr(L → 2L) = −Δr(L → L/2)/2^p (Richardson)
+    #[default]
+    Coarse,
+    /// on the mesh twice as fine as the last level: measured, several times the cost
+    Fine,
+}
+
+/// Convergence order assumed by the coarse check: the slowest measured on strips (the 45°
+/// strip's clamped corners, `paper_repro/convergence`), so the estimate errs on the large side
+/// for the others.
+pub const ORDER: f64 = 1.5;
+
 /// What a stage fitted, for the check.
 #[derive(Clone, Debug)]
 pub(super) enum Probe {
@@ -111,8 +129,10 @@ impl Linearised {
 /// The check's outcome.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshCheck {
-    /// the finer mesh the check solved on (of a 50 × 75 mm strip)
+    /// the finer mesh the check is about (of a 50 × 75 mm strip)
     pub mesh: (usize, usize),
+    /// the mesh it solved on: `mesh` itself, or the one half as fine as the last level
+    pub solved_on: (usize, usize),
     /// largest relative change of a determined stiffness, thickness, rigidity or tangent
     /// stiffness of the law across the tested range, and its name
     pub change: f64,
@@ -194,19 +214,27 @@ impl Fitter<'_> {
     pub(super) fn mesh_check(
         &mut self,
         last: (usize, usize),
+        mode: MeshCheckMode,
         determined: &dyn Fn(&str) -> bool,
     ) -> Result<Option<MeshCheck>, FitError> {
         let lins = self.final_linearisations(last);
-        if lins.is_empty() {
+        let coarse = ((last.0 / 2).max(1), (last.1 / 2).max(1));
+        if lins.is_empty() || mode == MeshCheckMode::Off || coarse == last {
             return Ok(None);
         }
         let finer = (2 * last.0, 2 * last.1);
+        // the defect towards the solved mesh, and the factor that makes it the one to `finer`
+        let (solved_on, factor) = match mode {
+            MeshCheckMode::Fine => (finer, 1.0),
+            _ => (coarse, -(2f64.powf(-ORDER))),
+        };
         self.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
-            finer.0, finer.1
+            solved_on.0, solved_on.1
         ));
         let mut out = MeshCheck {
             mesh: finer,
+            solved_on,
             change: 0.0,
             parameter: String::new(),
             changes: Vec::new(),
@@ -220,14 +248,14 @@ impl Fitter<'_> {
         let mut changes: Vec<(String, f64, bool)> = Vec::new();
         for lin in &lins {
             let (dr, labels, scale) = match &lin.probe {
-                Probe::Tensile(strips) => self.tensile_defect(strips, last, finer)?,
+                Probe::Tensile(strips) => self.tensile_defect(strips, last, solved_on)?,
                 Probe::Bends => {
-                    let coarse = self.bend_angles.clone();
-                    let fine = self.drape_angles(finer)?;
+                    let at_last = self.bend_angles.clone();
+                    let fine = self.drape_angles(solved_on)?;
                     let targets: Vec<f64> =
                         self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
                     let mut dr: Vec<f64> = (0..fine.len())
-                        .map(|k| (fine[k] - coarse[k]) / targets[k])
+                        .map(|k| factor * (fine[k] - at_last[k]) / targets[k])
                         .collect();
                     if lin.names == ["thickness_mm"] {
                         // the paper's section: a bend's rigidity is (a·τ)·τ²/12, and the tensile
@@ -253,6 +281,10 @@ impl Fitter<'_> {
                         .map(|b| format!("bend {}°", b.angle_deg));
                     (dr, labels.collect(), targets)
                 }
+            };
+            let dr: Vec<f64> = match lin.probe {
+                Probe::Tensile(_) => dr.iter().map(|v| factor * v).collect(),
+                Probe::Bends => dr,
             };
             if dr.len() != lin.j.nrows() {
                 continue;
@@ -332,11 +364,19 @@ impl Fitter<'_> {
         } else {
             String::new()
         };
+        let how = if m.solved_on == m.mesh {
+            format!("solved on {}x{}", m.mesh.0, m.mesh.1)
+        } else {
+            format!(
+                "estimated from {}x{} at order {ORDER}; --mesh-check fine solves on {}x{}",
+                m.solved_on.0, m.solved_on.1, m.mesh.0, m.mesh.1
+            )
+        };
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
         let line = format!(
-            "{}mesh check: refining {}x{} to {}x{} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit){law}",
+            "{}mesh check: refining {}x{} to {}x{} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit, {how}){law}",
             if bad { "warning: " } else { "" },
             last.0,
             last.1,

@@ -51,7 +51,7 @@ use crate::material::{BendingRigidity, Cutoffs, Eta, FabricMaterial, Orthotropic
 use crate::scene::{SceneError, StripRig};
 pub use bending::BendingMode;
 use map::{A12Rule, Direction, StageMap};
-pub use mesh_check::MeshCheck;
+pub use mesh_check::{MeshCheck, MeshCheckMode};
 use nalgebra::DMatrix;
 use optim::{Evaluation, Method};
 use preprocess::{Prepared, Strip};
@@ -108,8 +108,8 @@ pub struct FitOptions {
     /// Bending of its own (fitted rigidities) or the paper's one thickness.
     pub bending: BendingMode,
     /// Estimate how much refining the last mesh level once more would change the fit
-    /// ([`MeshCheck`]): one solve of every fitted test on the finer mesh.
-    pub mesh_check: bool,
+    /// ([`MeshCheck`]): one solve of every fitted test on a coarser or the finer mesh.
+    pub mesh_check: MeshCheckMode,
 }
 
 impl Default for FitOptions {
@@ -133,7 +133,7 @@ impl Default for FitOptions {
             strategy: crate::solve::Strategy::default(),
             max_error: 0.10,
             bending: BendingMode::Auto,
-            mesh_check: true,
+            mesh_check: MeshCheckMode::default(),
         }
     }
 }
@@ -541,14 +541,14 @@ pub fn fit(
     let uncertainty = f.final_uncertainty();
     f.time_stage("report", t0);
     let t0 = Instant::now();
-    let mesh_check = if opts.mesh_check {
+    let mesh_check = if opts.mesh_check != MeshCheckMode::Off {
         let determined = |name: &str| {
             uncertainty
                 .iter()
                 .find(|e| e.name == name)
                 .is_none_or(|e| e.determined)
         };
-        let check = f.mesh_check(last, &determined)?;
+        let check = f.mesh_check(last, opts.mesh_check, &determined)?;
         if let Some(m) = &check {
             f.mesh_check_notes(last, m);
         }

@@ -49,6 +49,11 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
             "mesh_check_mesh = {}",
             toml_str(&format!("{}x{}", m.mesh.0, m.mesh.1))
         );
+        let _ = writeln!(
+            s,
+            "mesh_check_solved_on = {}",
+            toml_str(&format!("{}x{}", m.solved_on.0, m.solved_on.1))
+        );
         if let Some(a) = m.angle_change_deg {
             let _ = writeln!(s, "mesh_change_drape_deg = {a:.4}");
         }

@@ -167,11 +167,12 @@ enum Command {
         /// one) or `auto` (orthotropic when both a warp and a weft bend exist).
         #[arg(long, value_enum, default_value = "auto")]
         bending: kshell::fit::BendingMode,
-        /// Skip the mesh check (one solve of every fitted test on a mesh twice as fine as the
-        /// last level, to estimate how much refining would change the fit: `[fit]`
-        /// mesh_change).
-        #[arg(long)]
-        no_mesh_check: bool,
+        /// Mesh check (`[fit]` mesh_change: how much refining the last level once more would
+        /// change the fit): `coarse` (one solve of every fitted test on the mesh half as fine,
+        /// carried to the finer one at order 1.5), `fine` (solved on the mesh twice as fine:
+        /// measured, several times the cost) or `off`.
+        #[arg(long, value_enum, default_value = "coarse")]
+        mesh_check: kshell::fit::MeshCheckMode,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -283,7 +284,7 @@ fn main() -> ExitCode {
             allow_outside,
             strategy,
             bending,
-            no_mesh_check,
+            mesh_check,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,
@@ -299,7 +300,7 @@ fn main() -> ExitCode {
         .map(|opts| kshell::fit::FitOptions {
             strategy,
             bending,
-            mesh_check: !no_mesh_check,
+            mesh_check,
             ..opts
         })
         .and_then(|opts| {
