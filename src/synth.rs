@@ -67,6 +67,8 @@ pub struct SynthOptions {
     pub seed: u64,
     /// Tensile strip mesh, faces across × along.
     pub mesh: (usize, usize),
+    /// Its grading (uniform by default; see [`crate::scene::STRIP_GRADING`]).
+    pub grading: crate::mesh::Grading,
 }
 
 impl Default for SynthOptions {
@@ -79,6 +81,7 @@ impl Default for SynthOptions {
             misalign_deg: 0.0,
             seed: 1,
             mesh: (16, 24),
+            grading: crate::mesh::Grading::UNIFORM,
         }
     }
 }
@@ -240,6 +243,7 @@ fn synth_tensile(
     let run_strip = |angle: f64, test: &str| -> Result<Vec<f64>, SynthError> {
         let mut strip = TensileStrip::new(width, gauge, angle);
         strip.mesh = opts.mesh;
+        strip.grading = opts.grading;
         // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
         strip.solver.max_iterations = 500;
         let curve = strip
@@ -473,6 +477,7 @@ mod tests {
         );
         let mut strip = TensileStrip::new(0.05, 0.075, 90.0);
         strip.mesh = (2, 3);
+        strip.grading = opts.grading;
         let direct: Vec<f64> = strip
             .run(&m, &[0.0025, 0.005, 0.0075])
             .unwrap()

@@ -92,23 +92,25 @@ fn noise_free_degree2_data_are_fitted_back() {
         m.thickness
     );
     // plausible laws (loading checked that the stress rises inside the cut-offs): exponents
-    // within the bound and no negligible term over the tested range, x̂ = (cut-off / 0.95)²
+    // within the bound and no negligible term over the tested range. The fitter bounds |α x̂|
+    // with x̂ from the strips' largest Green strain e (synth's 10 % strain: e = 0.105): e² for
+    // the yarns, (e/2)² for the shear; negligibility is judged over the range the cut-offs
+    // say the strips reached, x̂ = (cut-off / 0.95)²
     {
         let law = &m.law;
         let c = law.cutoffs;
-        for (eta, e_cut) in [
-            (&law.warp, c.e11.1),
-            (&law.weft, c.e22.1),
-            (&law.shear, c.e12.1),
+        let e = 0.105;
+        for (eta, e_cut, e_fit) in [
+            (&law.warp, c.e11.1, e),
+            (&law.weft, c.e22.1, e),
+            (&law.shear, c.e12.1, 0.5 * e),
         ] {
+            for a in &eta.alpha {
+                let beta = a * e_fit * e_fit;
+                assert!(beta.abs() <= kshell::fit::map::BETA_MAX + 1e-9, "{eta:?}");
+            }
             let xhat = (e_cut / 0.95).powi(2);
             assert!(xhat.is_finite() && xhat > 0.0, "cut-off {e_cut}");
-            for a in &eta.alpha {
-                assert!(
-                    (a * xhat).abs() <= 1.2 * kshell::fit::map::BETA_MAX,
-                    "{eta:?}"
-                );
-            }
             let small = kshell::fit::plausible::negligible_terms(eta, xhat);
             assert!(small.is_empty(), "negligible terms {small:?} in {eta:?}");
         }
@@ -299,8 +301,8 @@ fn the_fit_is_the_same_on_one_thread_and_on_several() {
 /// actually gives, and the default check (solved on the coarser mesh, carried to the finer one
 /// at order 1.5) must agree with the measured one. Measured when written: G12 +28.6 %
 /// predicted against +28.7 % refitted, a11 −0.38 against −0.39 %, a22 −0.10 against −0.20 %,
-/// thickness +0.63 against +0.64 %; on 8 × 12, G12 +7.95 % estimated from 4 × 6 against
-/// +8.07 % solved on 16 × 24.
+/// thickness +0.63 against +0.64 % (uniform cages; the numbers on the default graded cages
+/// are in the README).
 #[test]
 fn the_mesh_check_predicts_the_refit_on_the_finer_mesh() {
     let dir = folder("fit-mesh-check");
@@ -348,8 +350,11 @@ fn the_mesh_check_predicts_the_refit_on_the_finer_mesh() {
         value(e["mesh_check"].as_table().unwrap(), "g12_pa"),
         value(m["mesh_check"].as_table().unwrap(), "g12_pa"),
     );
+    // the estimate assumes the slowest order measured on uniform strips (1.2, the 45° strip's
+    // clamped corners), so it must not fall short of the measured change; the strips here
+    // converge at 1.3–1.9, for which it is at most 2^(1.9−1.2) = 1.6 times the change
     assert!(
-        mg > 0.02 && (eg - mg).abs() <= 0.25 * mg,
+        mg > 0.01 && eg >= 0.9 * mg && eg <= 2.0 * mg,
         "G12 change estimated {eg:+.4}, measured {mg:+.4}"
     );
     let mut largest: f64 = 0.0;

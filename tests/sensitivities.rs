@@ -32,9 +32,16 @@ fn material() -> FabricMaterial {
     }
 }
 
-fn forces(m: &FabricMaterial, angle: f64, elongations: &[f64], sens: bool) -> Vec<(f64, Vec<f64>)> {
+fn forces(
+    m: &FabricMaterial,
+    angle: f64,
+    elongations: &[f64],
+    sens: bool,
+    grading: kshell::mesh::Grading,
+) -> Vec<(f64, Vec<f64>)> {
     let mut strip = TensileStrip::new(0.05, 0.075, angle);
     strip.mesh = (4, 6);
+    strip.grading = grading;
     strip.solver.rtol = 1e-13;
     strip
         .run_with_sensitivities(m, elongations, sens)
@@ -48,8 +55,13 @@ fn forces(m: &FabricMaterial, angle: f64, elongations: &[f64], sens: bool) -> Ve
 fn strip_force_sensitivities_match_differences_of_full_solves() {
     let m = material();
     let elongations = [1.5e-3, 4.0e-3];
-    for angle in [90.0, 45.0, 22.5] {
-        let exact = forces(&m, angle, &elongations, true);
+    // uniform and graded cages (the fit's default)
+    let gradings = [kshell::mesh::Grading::UNIFORM, kshell::scene::STRIP_GRADING];
+    for (angle, grading) in [90.0, 45.0, 22.5]
+        .into_iter()
+        .flat_map(|a| gradings.map(|g| (a, g)))
+    {
+        let exact = forces(&m, angle, &elongations, true, grading);
         let mut k = m.law.params();
         k.push(m.thickness);
         for j in 0..k.len() {
@@ -60,7 +72,7 @@ fn strip_force_sensitivities_match_differences_of_full_solves() {
                 let mut mm = m.clone();
                 mm.law.set_params(&kk[..kk.len() - 1]);
                 mm.thickness = kk[kk.len() - 1];
-                forces(&mm, angle, &elongations, false)
+                forces(&mm, angle, &elongations, false, grading)
             };
             let (plus, minus) = (at(k[j] + h), at(k[j] - h));
             for (i, (f, df)) in exact.iter().enumerate() {
@@ -69,7 +81,7 @@ fn strip_force_sensitivities_match_differences_of_full_solves() {
                 let scale = f.abs() / k[j].abs().max(1e-3);
                 assert!(
                     (df[j] - fd).abs() <= 1e-5 * scale + 1e-7 * df[j].abs(),
-                    "angle {angle}, parameter {j} ({}), point {i}: exact {} vs differences {fd}",
+                    "angle {angle}, {grading:?}, parameter {j} ({}), point {i}: exact {} vs differences {fd}",
                     m.law.names().get(j).cloned().unwrap_or("thickness".into()),
                     df[j]
                 );

@@ -116,6 +116,11 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         if let Some(e) = t.avg_rel_error {
             let _ = writeln!(s, "avg_rel_error = {e:.6}");
         }
+        let excluded = t.points.iter().filter(|p| !p.2.is_finite()).count();
+        if excluded > 0 {
+            // points whose model equilibrium is a saddle: left out of the errors
+            let _ = writeln!(s, "excluded_points = {excluded}");
+        }
         if let Some(e) = t.avg_rel_error_aligned {
             let _ = writeln!(s, "avg_rel_error_aligned = {e:.6}");
         }
@@ -218,6 +223,11 @@ fn stem(t: &TestOutcome, i: usize) -> String {
 pub fn curve_csv(t: &TestOutcome) -> String {
     let mut s = String::from("elongation_mm,measured_n,fitted_n,rel_error\n");
     for &(e, m, f) in &t.points {
+        if !f.is_finite() {
+            // excluded (a saddle): no model force
+            let _ = writeln!(s, "{},{},,", num(e * 1e3), num(m));
+            continue;
+        }
         let _ = writeln!(
             s,
             "{},{},{},{}",
@@ -411,7 +421,12 @@ pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> 
                 .map_err(|e| e.to_string())?
                 .label(format!("{name} measured"))
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
-            let fitted: Vec<(f64, f64)> = t.points.iter().map(|p| (p.0 * 1e3, p.2)).collect();
+            let fitted: Vec<(f64, f64)> = t
+                .points
+                .iter()
+                .filter(|p| p.2.is_finite())
+                .map(|p| (p.0 * 1e3, p.2))
+                .collect();
             chart
                 .draw_series(LineSeries::new(fitted, BLACK.stroke_width(1)))
                 .map_err(|e| e.to_string())?;

@@ -22,6 +22,18 @@ pub(super) fn strip_mesh(level: (usize, usize), width: f64, length: f64) -> (usi
 /// Forces of a strip at its nodes and ∂F/∂k (law parameters, then thickness) when asked.
 pub(super) type NodeForces = (Vec<f64>, Vec<Vec<f64>>);
 
+/// A node's predicted force: NaN where its equilibrium is a saddle (the strip would wrinkle
+/// there and the flat state's force is not what a lab measures), so that every measured point
+/// interpolated from it is excluded, never silently compared (issue "a material you can
+/// trust", item 5).
+pub(super) fn node_force(p: &crate::scene::TensilePoint) -> f64 {
+    if p.report.stable {
+        p.force
+    } else {
+        f64::NAN
+    }
+}
+
 impl Fitter<'_> {
     /// The rig of strip `s` cut at `angle` on a mesh level: from the cache (warm) or set up;
     /// hand it back with [`Fitter::keep_rig`].
@@ -50,6 +62,7 @@ impl Fitter<'_> {
         }
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
+        t.grading = self.opts.grading;
         // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
         t.solver.max_iterations = 500;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
@@ -94,7 +107,7 @@ impl Fitter<'_> {
         self.stats.evaluations += 1;
         self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
         Ok((
-            pts.iter().map(|p| p.force).collect(),
+            pts.iter().map(node_force).collect(),
             pts.into_iter().map(|p| p.dforce).collect(),
         ))
     }
@@ -167,7 +180,7 @@ impl Fitter<'_> {
                     self.stats.evaluations += 1;
                     self.stats.newton_iterations +=
                         pts.iter().map(|p| p.report.iterations).sum::<usize>();
-                    let f: Vec<f64> = pts.iter().map(|p| p.force).collect();
+                    let f: Vec<f64> = pts.iter().map(node_force).collect();
                     self.predictions.insert((key.clone(), bits.clone()), f);
                 }
                 Err(source) => {
@@ -188,6 +201,9 @@ impl Fitter<'_> {
     }
 
     /// A curve's model forces at its points, interpolated from its strip's node forces.
+    /// The model's force at every measured point of curve `c`, interpolated from the node
+    /// forces: NaN where the interpolation uses a node with no force (a saddle, see
+    /// [`node_force`]).
     pub(super) fn curve_forces(&self, c: usize, node_forces: &[f64]) -> Vec<f64> {
         let curve = &self.prep.curves[c];
         let nodes = &self.prep.strips[curve.strip].nodes;
@@ -218,9 +234,15 @@ pub(super) fn curve_residuals(
     for &(e, f) in points {
         let weights = interpolation_weights(nodes, e);
         let model: f64 = weights.iter().map(|&(k, a)| a * node_forces[k]).sum();
-        out_r.push(w * (model - f) / f);
+        // a point interpolated from a saddle is excluded: no residual, no gradient
+        let excluded = !model.is_finite();
+        out_r.push(if excluded { 0.0 } else { w * (model - f) / f });
         if let Some(d) = node_dp {
             let mut row = vec![0.0; d.first().map_or(0, |r| r.len())];
+            if excluded {
+                out_j.push(row);
+                continue;
+            }
             for &(k, a) in &weights {
                 for (r, v) in row.iter_mut().zip(&d[k]) {
                     *r += w * a * v / f;
@@ -233,7 +255,36 @@ pub(super) fn curve_residuals(
 
 #[cfg(test)]
 mod tests {
-    use super::strip_mesh;
+    use super::{curve_residuals, strip_mesh};
+
+    /// A saddle's node (NaN force) excludes exactly the points interpolated from it: no
+    /// residual, no gradient; every other point keeps its weighted relative error.
+    #[test]
+    fn points_interpolated_from_a_saddle_are_excluded() {
+        let nodes: Vec<f64> = (1..=8).map(|k| k as f64).collect();
+        let forces: Vec<f64> = nodes.iter().map(|e| 2.0 * e).collect();
+        let dp: Vec<Vec<f64>> = nodes.iter().map(|e| vec![*e]).collect();
+        let points: Vec<(f64, f64)> = [1.5, 2.5, 6.5, 7.5].iter().map(|&e| (e, 2.2 * e)).collect();
+        let run = |forces: &[f64]| {
+            let (mut r, mut j) = (Vec::new(), Vec::new());
+            curve_residuals(&points, &nodes, forces, Some(&dp), &mut r, &mut j);
+            (r, j)
+        };
+        let (r, j) = run(&forces);
+        let w = 0.5; // 1/√4 points
+        for (k, v) in r.iter().enumerate() {
+            assert!((v - w * (2.0 / 2.2 - 1.0)).abs() < 1e-12, "point {k}: {v}");
+            assert!(j[k][0] != 0.0);
+        }
+        let mut saddle = forces.clone();
+        saddle[7] = f64::NAN;
+        let (r2, j2) = run(&saddle);
+        assert_eq!(r2.len(), 4);
+        // the last point uses node 8; the first two do not
+        assert_eq!((r2[3], j2[3][0]), (0.0, 0.0));
+        assert_eq!(&r2[..2], &r[..2]);
+        assert!(r2.iter().all(|v| v.is_finite()));
+    }
 
     #[test]
     fn narrow_strips_are_refined_across_with_the_ladder() {

@@ -286,7 +286,7 @@ impl Fitter<'_> {
                 })?;
                 newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
                 unstable += pts.iter().filter(|p| !p.report.stable).count();
-                let forces: Vec<f64> = pts.iter().map(|p| p.force).collect();
+                let forces: Vec<f64> = pts.iter().map(super::rigs::node_force).collect();
                 let d: Vec<Vec<f64>> = if jac {
                     pts.iter().map(|p| map.chain(q, &law, &p.dforce)).collect()
                 } else {
@@ -452,7 +452,8 @@ impl Fitter<'_> {
                 }
                 None => map.decode(cand, &mut self.law),
             }
-            let (err, range) = match self.shell_stage(map, strips, level, true) {
+            let run = self.shell_stage(map, strips, level, true);
+            let (err, range) = match run {
                 Ok(r) => r,
                 Err(e) if best.is_some() => {
                     self.log_degree(format!(
@@ -639,12 +640,8 @@ pub(super) fn ladder(
         }
         if let Some(prev) = &previous {
             let now = f.fitted_forces(&all, level)?;
-            let change = prev
-                .iter()
-                .zip(&now)
-                .map(|(a, b)| ((b - a) / b).abs())
-                .sum::<f64>()
-                / now.len().max(1) as f64;
+            let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
+            let change = super::mean_abs_finite(&d);
             f.say(&format!(
                 "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
                 from.0,

@@ -12,7 +12,7 @@
 //! strips.
 
 use super::map::A12Rule;
-use super::{mean_abs, FitError, Fitter, TestOutcome};
+use super::{mean_abs_finite, FitError, Fitter, TestOutcome};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
 
@@ -34,7 +34,7 @@ impl Fitter<'_> {
             .zip(&model)
             .map(|(m, q)| (q - m.1) / m.1)
             .collect();
-        Ok((mean_abs(&r), model))
+        Ok((mean_abs_finite(&r), model))
     }
 
     /// The misalignment Δθ ∈ [−m, m] (m = `max_misalign_deg`) that best explains curve `c`:
@@ -100,6 +100,7 @@ impl Fitter<'_> {
             }
             let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
             t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
+            t.grading = self.opts.grading;
             t.solver.max_iterations = 500;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
@@ -168,7 +169,17 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             .iter()
             .zip(&model)
             .map(|(m, p)| p / m.1)
+            .filter(|q| q.is_finite())
             .collect();
+        let excluded = model.len() - q.len();
+        if excluded > 0 {
+            f.notes.push(format!(
+                "warning: {} ({}°): {excluded} of {} points excluded from its errors: the model's equilibrium there is a saddle (the flat strip would wrinkle), whose force is not what the test measures",
+                t.curve.display(),
+                curve.angle_deg,
+                model.len()
+            ));
+        }
         let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
         let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
         let strip = &f.prep.strips[curve.strip];
@@ -176,7 +187,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         let mesh_error = coarse.as_ref().map(|nodes| {
             let rough = f.curve_forces(c, &nodes[curve.strip]);
             let d: Vec<f64> = model.iter().zip(&rough).map(|(a, b)| (a - b) / a).collect();
-            mean_abs(&d) / (2f64.powf(1.5) - 1.0)
+            mean_abs_finite(&d) / (2f64.powf(1.5) - 1.0)
         });
         if let Some(m) = mesh_error {
             if m > (err / 3.0).max(3e-3) {

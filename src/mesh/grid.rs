@@ -12,12 +12,67 @@ use super::PolyMesh;
 /// Note: this is the *control* cage. With the phantom boundary rule its limit surface covers the
 /// same rectangle exactly, because the rule reproduces affine maps up to the boundary.
 pub fn rectangular_grid(width: f64, length: f64, nx: usize, ny: usize) -> PolyMesh {
+    graded_grid(width, length, nx, ny, Grading::UNIFORM)
+}
+
+/// How a strip's control rows and columns crowd towards its edges: the cage line k of n sits
+/// at g(k/n) of the side with g(t) = t − a sin(2πt)/(2π), 0 ≤ a < 1, so the cells at both
+/// edges are (1 − a)/(1 + a) times the middle ones and g is smooth, odd about each edge (a
+/// reflected ghost line stays on the lattice) and one-to-one on the whole line. The limit
+/// surface of a graded cage covers the same rectangle (the boundary rules interpolate the
+/// edge lines); only how the parameter domain is spread over it changes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grading {
+    /// a across the strip (x, towards its free edges)
+    pub across: f64,
+    /// a along the strip (y, towards the jaws)
+    pub along: f64,
+}
+
+impl Grading {
+    pub const UNIFORM: Self = Self {
+        across: 0.0,
+        along: 0.0,
+    };
+
+    /// g(t) with strength `a`.
+    pub fn map(a: f64, t: f64) -> f64 {
+        use std::f64::consts::TAU;
+        t - a * (TAU * t).sin() / TAU
+    }
+
+    /// t with g(t) = s (Newton from s; g' ≥ 1 − a > 0).
+    pub fn inverse(a: f64, s: f64) -> f64 {
+        use std::f64::consts::TAU;
+        let mut t = s;
+        for _ in 0..50 {
+            let f = Self::map(a, t) - s;
+            let d = 1.0 - a * (TAU * t).cos();
+            let step = f / d;
+            t -= step;
+            if step.abs() < 1e-15 {
+                break;
+            }
+        }
+        t
+    }
+
+    /// Whether both strengths are in [0, 1).
+    pub fn is_valid(&self) -> bool {
+        [self.across, self.along]
+            .iter()
+            .all(|a| a.is_finite() && (0.0..1.0).contains(a))
+    }
+}
+
+/// [`rectangular_grid`] with its lines crowded towards the edges by `grading`.
+pub fn graded_grid(width: f64, length: f64, nx: usize, ny: usize, grading: Grading) -> PolyMesh {
     let mut positions = Vec::with_capacity((nx + 1) * (ny + 1));
     for j in 0..=ny {
         for i in 0..=nx {
             positions.push([
-                width * i as f64 / nx as f64,
-                length * j as f64 / ny as f64,
+                width * Grading::map(grading.across, i as f64 / nx as f64),
+                length * Grading::map(grading.along, j as f64 / ny as f64),
                 0.0,
             ]);
         }
@@ -36,6 +91,34 @@ pub fn rectangular_grid(width: f64, length: f64, nx: usize, ny: usize) -> PolyMe
 mod tests {
     use super::*;
     use crate::mesh::Topology;
+
+    #[test]
+    fn grading_is_one_to_one_odd_at_the_edges_and_inverted() {
+        for a in [0.0, 0.3, 0.7, 0.95] {
+            assert_eq!(Grading::map(a, 0.0), 0.0);
+            assert!((Grading::map(a, 1.0) - 1.0).abs() < 1e-15);
+            for t in [-0.2, 0.05, 0.3, 0.5, 0.9, 1.1] {
+                // odd about both edges: a reflected ghost line stays on the lattice
+                assert!((Grading::map(a, -t) + Grading::map(a, t)).abs() < 1e-15);
+                assert!((Grading::map(a, 1.0 + t) + Grading::map(a, 1.0 - t) - 2.0).abs() < 1e-14);
+                assert!((Grading::inverse(a, Grading::map(a, t)) - t).abs() < 1e-13);
+            }
+        }
+        // edge cells (1 − a)/(1 + a) of the middle ones, to first order in 1/n
+        let g = graded_grid(
+            1.0,
+            1.0,
+            2,
+            40,
+            Grading {
+                across: 0.0,
+                along: 0.5,
+            },
+        );
+        let y = |j: usize| g.positions[j * 3][1];
+        let ratio = (y(1) - y(0)) / (y(21) - y(20));
+        assert!((ratio - 1.0 / 3.0).abs() < 0.01, "{ratio}");
+    }
 
     #[test]
     fn grid_counts_and_valences() {

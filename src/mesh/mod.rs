@@ -13,7 +13,7 @@ mod grid;
 mod obj;
 pub mod shapes;
 
-pub use grid::rectangular_grid;
+pub use grid::{graded_grid, rectangular_grid, Grading};
 pub use obj::{parse_obj, read_obj, write_obj, ObjMesh};
 
 use crate::Vec3;

@@ -3,11 +3,11 @@
 //! parameters, with drape-angle sensitivities: the fitter's forward model).
 
 use super::{
-    build_model, edge_clamp, equilibrium, free_system, positive, spacing, EdgeClamp, Hold,
-    SceneError,
+    build_model, edge_clamp, equilibrium, free_system, positive, EdgeClamp, Hold, SceneError,
 };
 use crate::assembly::{ShellModel, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
+use crate::mesh::Grading;
 use crate::solve::{
     continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, SolveError, SolveReport,
 };
@@ -264,13 +264,14 @@ impl CantileverBend {
             self.angle_deg,
             self.mesh,
             self.boundary,
+            Grading::UNIFORM,
         )?;
-        let h = spacing(self.width, self.overhang, self.mesh);
         let clamp = edge_clamp(
             &model,
             self.boundary,
             self.mesh,
-            h,
+            (self.width, self.overhang),
+            Grading::UNIFORM,
             0,
             1,
             Hold::PositionAndSlope,

@@ -12,11 +12,11 @@ pub mod sphere;
 mod tensile;
 
 pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMENT};
-pub use tensile::{StripRig, TensilePoint, TensileStrip};
+pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING};
 
 use crate::assembly::{ModelError, ShellModel};
 use crate::material::FabricMaterial;
-use crate::mesh::rectangular_grid;
+use crate::mesh::{graded_grid, Grading};
 use crate::solve::{newton, FreeSystem, NewtonOptions, Slave, SolveError, SolveReport};
 use crate::subdiv::{BasisBuildError, BasisOptions, BoundaryRule, LimitBasis};
 use crate::Vec3;
@@ -89,7 +89,14 @@ fn build_model(
     angle_deg: f64,
     (nx, ny): (usize, usize),
     boundary: BoundaryRule,
+    grading: Grading,
 ) -> Result<ShellModel, SceneError> {
+    if !grading.is_valid() {
+        return Err(SceneError::Input(format!(
+            "mesh grading must be in [0, 1) each way, got {} across and {} along",
+            grading.across, grading.along
+        )));
+    }
     if !angle_deg.is_finite() {
         return Err(SceneError::Input(format!(
             "angle must be finite, got {angle_deg:?}"
@@ -101,7 +108,7 @@ fn build_model(
             "the mesh needs at least one face each way".into(),
         ));
     }
-    let mesh = rectangular_grid(width, length, nx, ny);
+    let mesh = graded_grid(width, length, nx, ny, grading);
     let basis = LimitBasis::new(
         &mesh,
         BasisOptions {
@@ -146,11 +153,13 @@ struct EdgeClamp {
     motion: Vec<(usize, f64)>,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn edge_clamp(
     model: &ShellModel,
     rule: BoundaryRule,
     (nx, ny): (usize, usize),
-    (hx, hy): (f64, f64),
+    (width, length): (f64, f64),
+    grading: Grading,
     row: i64,
     inward: i64,
     hold: Hold,
@@ -158,7 +167,11 @@ fn edge_clamp(
     let x0 = &model.basis.control_points;
     let mut lattice = std::collections::HashMap::new();
     for (v, p) in x0.iter().enumerate() {
-        lattice.insert(((p[0] / hx).round() as i64, (p[1] / hy).round() as i64), v);
+        // the cage line a control point sits on (ghosts included: the grading is odd about
+        // each edge, so a reflected line is line −1 or n + 1)
+        let i = Grading::inverse(grading.across, p[0] / width) * nx as f64;
+        let j = Grading::inverse(grading.along, p[1] / length) * ny as f64;
+        lattice.insert((i.round() as i64, j.round() as i64), v);
     }
     let node = |i: i64, j: i64| {
         lattice.get(&(i, j)).copied().ok_or_else(|| {
@@ -227,9 +240,4 @@ fn edge_clamp(
         }
     }
     Ok(clamp)
-}
-
-/// Grid spacing of a strip mesh.
-fn spacing(width: f64, length: f64, (nx, ny): (usize, usize)) -> (f64, f64) {
-    (width / nx as f64, length / ny as f64)
 }

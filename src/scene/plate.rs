@@ -14,6 +14,7 @@
 
 use super::{build_model, equilibrium, free_system, SceneError};
 use crate::material::{FabricMaterial, OrthotropicStvk};
+use crate::mesh::Grading;
 use crate::solve::{NewtonOptions, Slave};
 use crate::subdiv::BoundaryRule;
 
@@ -67,7 +68,7 @@ impl SquarePlate {
             Support::Simple => BoundaryRule::Phantom,
             Support::Clamped => BoundaryRule::Ghost,
         };
-        let mut model = build_model(&material, a, a, 90.0, (n, n), rule)?;
+        let mut model = build_model(&material, a, a, 90.0, (n, n), rule, Grading::UNIFORM)?;
         model.set_gravity([0.0, 0.0, -g]);
         let x0 = model.basis.control_points.clone();
         let h = a / n as f64;
