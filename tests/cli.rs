@@ -432,3 +432,43 @@ fn negative_a12_is_a_legal_material() {
     assert_eq!(rc, 2);
     assert!(err.contains("need a12² < a11·a22"), "{err}");
 }
+
+/// A large elongation step into a wrinkling bias strip: Newton from the predictor stagnated
+/// (cotton at 45° on a graded 8 × 12 cage, 4 → 6 mm, relative residual stuck at 1); the step
+/// is now cut into sub-steps, and the equilibrium is the one that small steps reach.
+#[test]
+fn a_large_step_into_a_wrinkling_strip_is_taken_in_sub_steps() {
+    let material = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/paper_repro/fabrics/materials/cotton.toml"
+    );
+    let last_force = |steps: &str| -> f64 {
+        let (rc, out, err) = ks_fit(&[
+            "tensile",
+            "--material",
+            material,
+            "--angle",
+            "45",
+            "--width",
+            "50",
+            "--length",
+            "75",
+            "--to",
+            "6",
+            "--steps",
+            steps,
+            "--mesh",
+            "8x12",
+            "--grading",
+            "0.8,0.8",
+        ]);
+        assert_eq!(rc, 0, "{steps} steps: {err}");
+        let last = out.lines().last().unwrap();
+        last.split(',').nth(1).unwrap().parse().unwrap()
+    };
+    let (coarse, fine) = (last_force("3"), last_force("6"));
+    assert!(
+        (coarse / fine - 1.0).abs() < 1e-6,
+        "{coarse} N against {fine} N"
+    );
+}

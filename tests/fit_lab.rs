@@ -55,6 +55,8 @@ fn clean_dataset(tag: &str) -> PathBuf {
         "0.05",
         "--mesh",
         "8x12",
+        "--grading",
+        "0.8,0.8",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
     data

@@ -165,6 +165,58 @@ fn gauss_newton_step(j: &DMatrix<f64>, dr: &[f64]) -> Option<DVector<f64>> {
     jtj.cholesky().map(|c| c.solve(&rhs))
 }
 
+impl MeshCheck {
+    /// The criterion of a mesh-independent fit: no determined parameter moves by
+    /// 1 %, no fitted curve by 0.3 %, no drape angle by 0.1°.
+    pub fn passes(&self) -> bool {
+        self.change < 0.01
+            && self.curve_change < 3e-3
+            && self.angle_change_deg.is_none_or(|a| a < 0.1)
+    }
+
+    /// The largest change of a stage's determined quantities (its stiffness and its law's
+    /// tangent stiffness across the tested range, as the membrane's a·τ).
+    pub(super) fn stage_change(&self, dir: super::map::Direction) -> f64 {
+        use super::map::Direction;
+        let (stiffness, prefix) = match dir {
+            Direction::Warp => ("a11_pa", "warp_"),
+            Direction::Weft => ("a22_pa", "weft_"),
+            Direction::Shear => ("g12_pa", "bias_"),
+        };
+        // the stage's own change: the thickness's rescaling of a (a·τ kept) added back, as
+        // the stage fits a·τ; a stage the check did not see counts as changed
+        let tau = self
+            .changes
+            .iter()
+            .find(|(n, _)| n == "thickness_mm")
+            .map_or(0.0, |(_, c)| *c);
+        self.changes
+            .iter()
+            .filter(|(n, _)| {
+                n == stiffness || (n.starts_with(prefix) && n.contains("_tangent_at_"))
+            })
+            .map(|(_, c)| (c + tau).abs())
+            .reduce(f64::max)
+            .unwrap_or(f64::INFINITY)
+    }
+
+    /// The same check carried one level finer at convergence order `q` (every change
+    /// divided by 2^q).
+    pub fn next_level(&self, q: f64) -> Self {
+        let k = 2f64.powf(-q);
+        let mut m = self.clone();
+        m.mesh = (2 * self.mesh.0, 2 * self.mesh.1);
+        m.change *= k;
+        m.law_change *= k;
+        m.curve_change *= k;
+        m.angle_change_deg = m.angle_change_deg.map(|a| a * k);
+        for c in &mut m.changes {
+            c.1 *= k;
+        }
+        m
+    }
+}
+
 impl Fitter<'_> {
     /// The tensile stages' latest linearisations at the law's final degrees, then the bend
     /// stage's, all on `level`.
@@ -177,9 +229,11 @@ impl Fitter<'_> {
                 Direction::Weft => self.law.weft.degree(),
                 Direction::Shear => self.law.shear.degree(),
             };
+            // the stage's linearisation on `level`, or on the coarser level it was last
+            // fitted on (a stage the ladder did not refit)
             let found = self.linearised.iter().rev().find(|l| {
                 l.dir == Some(dir)
-                    && l.level == level
+                    && l.level.0 <= level.0
                     && l.names.iter().filter(|n| n.contains("_alpha_")).count() == degree
             });
             out.extend(found.cloned());
@@ -215,6 +269,22 @@ impl Fitter<'_> {
                 stage: format!("mesh check: the cantilevers on {}×{}", level.0, level.1),
                 source,
             })
+    }
+
+    /// The refit change from `from` to the mesh twice as fine, measured there (the ladder's
+    /// test of whether that level is needed); `None` when no stage has a linearisation.
+    pub(super) fn refit_change(
+        &mut self,
+        from: (usize, usize),
+    ) -> Result<Option<MeshCheck>, FitError> {
+        let errors = self.final_uncertainty();
+        let determined = |name: &str| {
+            errors
+                .iter()
+                .find(|e| e.name == name)
+                .is_none_or(|e| e.determined)
+        };
+        self.mesh_check(from, MeshCheckMode::Fine, &determined)
     }
 
     /// The mesh check of the fit on `last` (see the module doc); `determined` says which
@@ -360,9 +430,7 @@ impl Fitter<'_> {
     /// The check's line in the notes, a warning when the fit is not mesh-independent (a
     /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
     pub(super) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
-        let bad = m.change >= 0.01
-            || m.curve_change >= 3e-3
-            || m.angle_change_deg.is_some_and(|a| a >= 0.1);
+        let bad = !m.passes();
         let law = if m.law_change >= 0.01 {
             format!(
                 "; η's weights and exponents one by one by up to {:.0} % ({}), which the curves do not pin down",

@@ -1,11 +1,11 @@
-//! The stages of the fit (paper §5): the homogeneous bootstrap with the degree choice, the
-//! tensile stages on the shell model, and the ladder of meshes (the thickness stage is in
-//! `thickness.rs`).
+//! The stages of the fit (paper §5): the homogeneous bootstrap with the degree choice and the
+//! tensile stages on the shell model (the thickness stage is in `thickness.rs`, the ladder of
+//! meshes in `ladder.rs`).
 
-use super::bootstrap::homogeneous_curve;
 use super::map::{beta_to_var, Direction, StageMap};
 use super::optim::{minimize, Evaluation, Method, OptimOptions};
 use super::rigs::curve_residuals;
+use super::surrogate::{homogeneous_fit, mapped_start};
 use super::{to_evaluation, FitError, Fitter, StrainRange, TRIAL_RETRY_ITERATIONS};
 use crate::material::Orthotropic;
 use crate::scene::SceneError;
@@ -21,61 +21,9 @@ impl Fitter<'_> {
         curves: &[usize],
         p0: Vec<f64>,
     ) -> Option<(Vec<f64>, f64, f64)> {
-        let mut p = p0;
-        let base = self.law.clone();
-        let tau = self.thickness;
-        let prep = &self.prep;
-        let opts = OptimOptions {
-            method: Method::GaussNewton,
-            max_iterations: 100,
-            rel_decrease: 1e-10,
-            gtol: 0.0,
-            target: 0.0,
-            max_step: 2.0,
-        };
-        let residuals = |q: &[f64], jac: bool| -> Result<(Vec<f64>, Vec<Vec<f64>>), ()> {
-            let mut law = base.clone();
-            map.decode(q, &mut law);
-            let (mut r, mut j) = (Vec::new(), Vec::new());
-            for &c in curves {
-                let curve = &prep.curves[c];
-                let s = &prep.strips[curve.strip];
-                let elong: Vec<f64> = curve.points.iter().map(|p| p.0).collect();
-                let pts = homogeneous_curve(&law, s.angle_deg, s.width, s.length, tau, &elong, jac)
-                    .map_err(|_| ())?;
-                let w = 1.0 / (elong.len() as f64).sqrt();
-                for (m, h) in curve.points.iter().zip(&pts) {
-                    r.push(w * (h.force - m.1) / m.1);
-                    if jac {
-                        let d = map.chain(q, &law, &h.dforce);
-                        j.push(d.iter().map(|v| w * v / m.1).collect());
-                    }
-                }
-            }
-            Ok((r, j))
-        };
-        let rep = minimize(&mut p, &opts, |q: &[f64], jac: bool| {
-            let (r, j) = residuals(q, jac)?;
-            Ok::<_, ()>(to_evaluation(r, j, q.len(), jac))
-        })
-        .ok()?;
-        self.stats.bootstrap_evaluations += rep.evaluations;
-        let (r, _) = residuals(&p, false).ok()?;
-        // unweighted relative errors, curve by curve
-        let lens: Vec<usize> = curves
-            .iter()
-            .map(|&c| prep.curves[c].points.len())
-            .collect();
-        let mut rel = Vec::with_capacity(r.len());
-        let mut k = 0;
-        for &n in &lens {
-            let w = 1.0 / (n as f64).sqrt();
-            rel.extend(r[k..k + n].iter().map(|v| v / w));
-            k += n;
-        }
-        let err = super::mean_abs(&rel);
-        let shape = super::shape_error(&lens, &rel);
-        (err.is_finite() && shape.is_finite()).then_some((p, err, shape))
+        let fit = homogeneous_fit(&self.prep, &self.law, self.thickness, map, curves, p0, None)?;
+        self.stats.bootstrap_evaluations += fit.evaluations;
+        Some((fit.p, fit.error, fit.shape))
     }
 
     /// Degree choice and initial guess of one direction on the homogeneous strip. Degree
@@ -187,14 +135,18 @@ impl Fitter<'_> {
 
     /// One tensile stage on the shell model at one mesh level, over the stage's strips;
     /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
-    /// strain range the strips exercise there.
-    fn shell_stage(
+    /// strain range the strips exercise there. The stage starts with space-mapped steps on
+    /// the homogeneous strip ([`super::surrogate`]); a `raise`d degree whose mapped steps
+    /// find no better law is given up (`None`): from a zero-weight term, the shell's own
+    /// iterations then gain nothing either (measured: one iteration, 10 s, on cotton's bias).
+    pub(super) fn shell_stage(
         &mut self,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
-    ) -> Result<(f64, Option<StrainRange>), FitError> {
+        raise: bool,
+    ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
         let t0 = Instant::now();
         let mut rigs = Vec::new();
         for &s in strips {
@@ -268,6 +220,34 @@ impl Fitter<'_> {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
             source,
         };
+        let r0 = problem(&p, false).map_err(fail)?.residuals;
+        let flat: Vec<usize> = curves.iter().flatten().copied().collect();
+        let mut shell = |q: &[f64]| problem(q, false).ok().map(|e| e.residuals);
+        let m = mapped_start(prep, &base, tau, map, &flat, &mut p, r0, 8, &mut shell);
+        self.stats.bootstrap_evaluations += m.homogeneous_evaluations;
+        let note = format!(
+            "{}: degree {} on {}×{}: space-mapped start, objective {:.3e} -> {:.3e} ({} of {} proposals kept)",
+            map.dir.name(),
+            map.degree(&p),
+            level.0,
+            level.1,
+            m.before,
+            m.after,
+            m.kept,
+            m.shell_solves
+        );
+        if raise && m.kept == 0 {
+            self.stats.evaluations += evals;
+            self.stats.newton_iterations += newton;
+            self.stats.unstable_solves += unstable;
+            self.log_degree(note);
+            for (key, rig) in rigs {
+                self.keep_rig(key, rig);
+            }
+            self.time_stage(map.dir.name(), t0);
+            return Ok(None);
+        }
+        self.degree_log.push(note);
         if first_level && !map.c_known {
             // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
             // jaws stop the strip from shearing freely): first fit the stiffness c alone
@@ -381,14 +361,14 @@ impl Fitter<'_> {
             self.keep_rig(key, rig);
         }
         self.time_stage(map.dir.name(), t0);
-        Ok((shape, range))
+        Ok(Some((shape, range)))
     }
 
     /// Degree choice on the shell model: degree 1 from the bootstrap, degree d + 1 from the
     /// shell's degree-d fit with a new zero-weight term bending where the bootstrap put its last term;
     /// kept only when it lowers the shape error by the degree gain (so the kept law is never
     /// worse than degree d's).
-    fn shell_degree_ladder(
+    pub(super) fn shell_degree_ladder(
         &mut self,
         map: StageMap,
         strips: &[usize],
@@ -413,9 +393,17 @@ impl Fitter<'_> {
                 }
                 None => map.decode(cand, &mut self.law),
             }
-            let run = self.shell_stage(map, strips, level, true);
+            let run = self.shell_stage(map, strips, level, true, best.is_some());
             let (err, range) = match run {
-                Ok(r) => r,
+                Ok(Some(r)) => r,
+                Ok(None) => {
+                    self.log_degree(format!(
+                        "{}: degree {} kept: degree {degree}'s space-mapped start found no better law",
+                        map.dir.name(),
+                        degree - 1
+                    ));
+                    break;
+                }
                 Err(e) if best.is_some() => {
                     self.log_degree(format!(
                         "{}: degree {degree} failed on the shell ({e}); degree {} kept",
@@ -479,7 +467,7 @@ impl Fitter<'_> {
 
     /// Forces of every fitted curve on a mesh level at the current material (for the
     /// ladder's change measure).
-    fn fitted_forces(
+    pub(super) fn fitted_forces(
         &mut self,
         strips: &[usize],
         level: (usize, usize),
@@ -568,103 +556,4 @@ pub(super) fn bootstrap_all(
     }
     f.time_stage("bootstrap", t0);
     shear_candidates
-}
-
-/// The shell model, coarse to fine; returns the meshes fitted on.
-pub(super) fn ladder(
-    f: &mut Fitter,
-    maps: &[StageMap],
-    strips: &[Vec<usize>],
-    shear_candidates: &[Vec<f64>],
-) -> Result<Vec<(usize, usize)>, FitError> {
-    let opts = f.opts;
-    let all: Vec<usize> = strips.iter().flatten().copied().collect();
-    let mut meshes = Vec::new();
-    let mut previous: Option<Vec<f64>> = None;
-    let mut last_change: Option<f64> = None;
-    for (li, &level) in opts.ladder.iter().enumerate() {
-        let from = meshes.last().copied().unwrap_or(level);
-        // is this level worth it? the change it would bring, from the last measured one at
-        // order 1.5 (the slowest order measured on strips: the 45° strip's clamped corners)
-        if let (Some(change), true) = (last_change, li >= 2) {
-            let estimate = change / 2f64.powf(1.5);
-            if estimate < opts.skip_tol {
-                let note = format!(
-                    "meshes from {}×{} on skipped: estimated to change the {}×{} fit's forces by {:.2} % (the last level changed them by {:.2} %; below {:.2} %)",
-                    level.0, level.1, from.0, from.1,
-                    100.0 * estimate, 100.0 * change, 100.0 * opts.skip_tol
-                );
-                f.say(&note);
-                f.notes.push(note);
-                break;
-            }
-        }
-        if let Some(prev) = &previous {
-            let now = f.fitted_forces(&all, level)?;
-            let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
-            let change = super::mean_abs_finite(&d);
-            f.say(&format!(
-                "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
-                from.0,
-                from.1,
-                100.0 * change,
-                level.0,
-                level.1
-            ));
-            last_change = Some(change);
-            if change < opts.skip_tol {
-                let note = format!(
-                    "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
-                    level.0, level.1, from.0, from.1, 100.0 * change, 100.0 * opts.skip_tol
-                );
-                f.say(&note);
-                f.notes.push(note);
-                break;
-            }
-        }
-        meshes.push(level);
-        for k in 0..3 {
-            if strips[k].is_empty() {
-                continue;
-            }
-            let (_, range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
-                // the homogeneous strip models a clamped bias strip poorly: choose the shear
-                // degree on the shell model itself
-                f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
-            } else {
-                f.shell_stage(maps[k], &strips[k], level, li == 0)?
-            };
-            // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
-            if let Some((lo, hi)) = range {
-                let law = &mut f.law;
-                let msg = match k {
-                    0 => {
-                        law.cutoffs.e11 = (0.0, 0.95 * hi[0]);
-                        format!("cut-off Ẽ11 ≤ {:.4}", law.cutoffs.e11.1)
-                    }
-                    1 => {
-                        law.cutoffs.e22 = (0.0, 0.95 * hi[1]);
-                        format!("cut-off Ẽ22 ≤ {:.4}", law.cutoffs.e22.1)
-                    }
-                    _ => {
-                        let e12 = 0.95 * hi[2].abs().max(lo[2].abs());
-                        law.cutoffs.e12 = (-e12, e12);
-                        format!("cut-off |Ẽ12| ≤ {e12:.4}")
-                    }
-                };
-                f.say(&msg);
-            }
-            f.keep_rising(maps[k].dir);
-        }
-        let data = f.data;
-        if f.own_bending {
-            f.bending_stage(&data.bend, level)?;
-        } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-            f.thickness_stage(&data.bend, level)?;
-        }
-        if li + 1 < opts.ladder.len() {
-            previous = Some(f.fitted_forces(&all, level)?);
-        }
-    }
-    Ok(meshes)
 }

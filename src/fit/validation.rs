@@ -149,8 +149,9 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         .collect();
     f.predict_many(&jobs, last)?;
     // each strip's discretisation error: the last level against one with half the faces
-    // each way, at order 1.5 (the slowest measured on strips: the 45° strip's clamped
-    // corners), so the estimate errs on the large side for 0° and 90°
+    // each way, at the slowest order measured on the cage (the 45° strip's clamped corners:
+    // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
+    let order = super::mesh_check::order(f.opts.grading);
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
     f.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",
@@ -187,7 +188,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         let mesh_error = coarse.as_ref().map(|nodes| {
             let rough = f.curve_forces(c, &nodes[curve.strip]);
             let d: Vec<f64> = model.iter().zip(&rough).map(|(a, b)| (a - b) / a).collect();
-            mean_abs_finite(&d) / (2f64.powf(1.5) - 1.0)
+            mean_abs_finite(&d) / (2f64.powf(order) - 1.0)
         });
         if let Some(m) = mesh_error {
             if m > (err / 3.0).max(3e-3) {

@@ -328,7 +328,7 @@ pub fn cmd_synth(
     let data = kshell::synth::synthesize(&mat, opts, &mut progress).map_err(|e| e.to_string())?;
     let comment = format!(
         "SYNTHETIC dataset written by ks-fit synth from the material {}\n\
-         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{}\n\
+         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{}\n\
          tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees",
         material.display(),
         opts.max_strain,
@@ -338,7 +338,9 @@ pub fn cmd_synth(
         opts.misalign_deg,
         opts.seed,
         opts.mesh.0,
-        opts.mesh.1
+        opts.mesh.1,
+        opts.grading.across,
+        opts.grading.along
     );
     kshell::dataset::write_dataset_with_comment(out, &data, &comment)
         .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;

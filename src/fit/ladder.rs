@@ -1,0 +1,152 @@
+//! The ladder of meshes (paper §5, "multiresolution"): the stages fitted coarse to fine, each
+//! level started from the last. A level that doubles the last is first solved at the last fit:
+//! those forces are the measured defect of the mesh check ([`super::mesh_check`]), whose
+//! first-order refit says whether the level is needed at all (no determined parameter moving
+//! by 1 %, no curve by 0.3 %) and which stages it would move (the others are not refitted).
+
+use super::map::StageMap;
+use super::mesh_check::{order, MeshCheck};
+use super::{FitError, Fitter};
+
+/// A stage whose determined quantities the last refinement moved by less than this is
+/// not refitted on the finer level (a tenth of the mesh check's 1 %).
+const STAGE_UNCHANGED: f64 = 1e-3;
+
+/// The shell model, coarse to fine; returns the meshes fitted on.
+pub(super) fn ladder(
+    f: &mut Fitter,
+    maps: &[StageMap],
+    strips: &[Vec<usize>],
+    shear_candidates: &[Vec<f64>],
+) -> Result<Vec<(usize, usize)>, FitError> {
+    let opts = f.opts;
+    let all: Vec<usize> = strips.iter().flatten().copied().collect();
+    let mut meshes = Vec::new();
+    let mut previous: Option<Vec<f64>> = None;
+    // the refit change measured between the last two levels (parameters and curves)
+    let mut last_check: Option<MeshCheck> = None;
+    for (li, &level) in opts.ladder.iter().enumerate() {
+        let from = meshes.last().copied().unwrap_or(level);
+        // is this level worth it? the last measured refit change, carried one level finer
+        if let (Some(m), true) = (&last_check, li >= 2) {
+            let estimate = m.next_level(order(opts.grading));
+            if estimate.passes() {
+                let note = format!(
+                    "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
+                    level.0, level.1, from.0, from.1, m.parameter,
+                    100.0 * estimate.change, 100.0 * estimate.curve_change,
+                    100.0 * m.change, 100.0 * m.curve_change, order(opts.grading)
+                );
+                f.say(&note);
+                f.notes.push(note);
+                break;
+            }
+        }
+        if let Some(prev) = &previous {
+            let now = f.fitted_forces(&all, level)?;
+            let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
+            let change = super::mean_abs_finite(&d);
+            f.say(&format!(
+                "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
+                from.0,
+                from.1,
+                100.0 * change,
+                level.0,
+                level.1
+            ));
+            // a doubling: the refit's parameter change, measured (the forces just solved
+            // are the check's defect); otherwise the forces' change decides
+            let check = if level == (2 * from.0, 2 * from.1) {
+                f.refit_change(from)?
+            } else {
+                None
+            };
+            if let Some(m) = &check {
+                f.say(&format!(
+                    "refitting the {}×{} fit on {}×{} would change {} by {:.2} % and its curves by {:.2} % (first-order refit, measured)",
+                    from.0, from.1, level.0, level.1,
+                    if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
+                    100.0 * m.change, 100.0 * m.curve_change
+                ));
+            }
+            let skip = match &check {
+                Some(m) => m.passes().then(|| {
+                    format!(
+                        "meshes from {}×{} on skipped: refitting the {}×{} fit on {}×{} would change {} by only {:.2} % and its curves by {:.2} % (first-order refit; below 1 % and 0.3 %)",
+                        level.0, level.1, from.0, from.1, level.0, level.1,
+                        if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
+                        100.0 * m.change, 100.0 * m.curve_change
+                    )
+                }),
+                None => (change < opts.skip_tol).then(|| {
+                    format!(
+                        "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
+                        level.0, level.1, from.0, from.1, 100.0 * change, 100.0 * opts.skip_tol
+                    )
+                }),
+            };
+            if let Some(note) = skip {
+                f.say(&note);
+                f.notes.push(note);
+                f.ladder_check = check;
+                break;
+            }
+            last_check = check;
+        }
+        meshes.push(level);
+        for k in 0..3 {
+            if strips[k].is_empty() {
+                continue;
+            }
+            // a stage the last refinement left unchanged is not refitted (its law stays)
+            if let Some(moved) = last_check.as_ref().map(|m| m.stage_change(maps[k].dir)) {
+                if li > 0 && moved < STAGE_UNCHANGED {
+                    f.say(&format!(
+                        "{} stage not refitted on {}×{}: refining changed its stiffness and tangents by {:.3} % at most (below {:.2} %)",
+                        maps[k].dir.name(), level.0, level.1, 100.0 * moved, 100.0 * STAGE_UNCHANGED
+                    ));
+                    continue;
+                }
+            }
+            let (_, range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+                // the homogeneous strip models a clamped bias strip poorly: choose the shear
+                // degree on the shell model itself
+                f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
+            } else {
+                f.shell_stage(maps[k], &strips[k], level, li == 0, false)?
+                    .expect("a stage that raises no degree always runs")
+            };
+            // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
+            if let Some((lo, hi)) = range {
+                let law = &mut f.law;
+                let msg = match k {
+                    0 => {
+                        law.cutoffs.e11 = (0.0, 0.95 * hi[0]);
+                        format!("cut-off Ẽ11 ≤ {:.4}", law.cutoffs.e11.1)
+                    }
+                    1 => {
+                        law.cutoffs.e22 = (0.0, 0.95 * hi[1]);
+                        format!("cut-off Ẽ22 ≤ {:.4}", law.cutoffs.e22.1)
+                    }
+                    _ => {
+                        let e12 = 0.95 * hi[2].abs().max(lo[2].abs());
+                        law.cutoffs.e12 = (-e12, e12);
+                        format!("cut-off |Ẽ12| ≤ {e12:.4}")
+                    }
+                };
+                f.say(&msg);
+            }
+            f.keep_rising(maps[k].dir);
+        }
+        let data = f.data;
+        if f.own_bending {
+            f.bending_stage(&data.bend, level)?;
+        } else if !data.bend.is_empty() && data.known.thickness.is_none() {
+            f.thickness_stage(&data.bend, level)?;
+        }
+        if li + 1 < opts.ladder.len() {
+            previous = Some(f.fitted_forces(&all, level)?);
+        }
+    }
+    Ok(meshes)
+}
