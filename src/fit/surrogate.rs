@@ -249,3 +249,131 @@ pub(super) fn mapped_start(
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dataset::Role;
+    use crate::fit::map::{A12Rule, Direction};
+    use crate::fit::preprocess::{Curve, Strip};
+    use crate::material::{Cutoffs, Eta};
+
+    fn law() -> Orthotropic {
+        Orthotropic {
+            a11: 2.0e8,
+            a22: 1.2e8,
+            a12: 0.6e8,
+            g12: 3.0e6,
+            warp: Eta::linear(),
+            weft: Eta::linear(),
+            shear: Eta::linear(),
+            cutoffs: Cutoffs::none(),
+        }
+    }
+
+    /// One 45° strip, 50 × 75 mm, whose "measured" forces are `scale` times the homogeneous
+    /// strip's at the law `truth` (variables of a degree-2 shear).
+    fn setup(map: StageMap, truth: &[f64], scale: f64) -> Prepared {
+        let elong: Vec<f64> = (1..=8).map(|k| 0.5e-3 * k as f64).collect();
+        let mut prep = Prepared {
+            curves: vec![Curve {
+                test: 0,
+                angle_deg: 45.0,
+                role: Role::Fit,
+                repeat: 1,
+                used_in_fit: true,
+                toe: 0.0,
+                toe_auto: false,
+                points: elong.iter().map(|&e| (e, 1.0)).collect(),
+                dropped: 0,
+                strip: 0,
+            }],
+            strips: vec![Strip {
+                angle_deg: 45.0,
+                width: 0.05,
+                length: 0.075,
+                curves: vec![0],
+                nodes: elong.clone(),
+            }],
+            notes: Vec::new(),
+        };
+        let h = homogeneous_forces(&prep, &law(), 2e-4, map, &[0], truth).unwrap();
+        for (p, f) in prep.curves[0].points.iter_mut().zip(h) {
+            p.1 = scale * f;
+        }
+        prep
+    }
+
+    /// Where the expensive model is the cheap one times a constant (a clamped strip that is
+    /// uniformly stiffer), the corrected model is exact: the mapped start finds the law in
+    /// a shell solve or two from a start far off.
+    #[test]
+    fn the_mapped_start_is_exact_when_the_correction_is() {
+        let map = StageMap {
+            dir: Direction::Shear,
+            xhat: 0.05f64.powi(2),
+            c_known: false,
+            a12: A12Rule::HalfMin,
+        };
+        let truth = vec![3.0e6f64.ln(), 0.3, beta_var(0.2), beta_var(2.5)];
+        let prep = setup(map, &truth, 1.15);
+        let base = law();
+        let residuals = |q: &[f64]| -> Option<Vec<f64>> {
+            let h = homogeneous_forces(&prep, &base, 2e-4, map, &[0], q)?;
+            let w = 1.0 / (h.len() as f64).sqrt();
+            let pts = &prep.curves[0].points;
+            Some(
+                h.iter()
+                    .zip(pts)
+                    .map(|(h, m)| w * (1.15 * h - m.1) / m.1)
+                    .collect(),
+            )
+        };
+        // degree 1's law raised by a zero-weight term, stiffness 40 % off
+        let mut p = vec![(0.6 * 3.0e6f64).ln(), 0.0, beta_var(1.0), beta_var(0.5)];
+        let r0 = residuals(&p).unwrap();
+        let mut solves = 0;
+        let mut shell = |q: &[f64]| {
+            solves += 1;
+            residuals(q)
+        };
+        let m = mapped_start(&prep, &base, 2e-4, map, &[0], &mut p, r0, 8, &mut shell);
+        assert!(m.before > 1e-2, "{m:?}");
+        assert!(m.after < 1e-14, "{m:?}");
+        assert!(m.kept >= 1 && m.shell_solves == solves, "{m:?}");
+        // from the optimum: the shell's objective never rises
+        let r = residuals(&p).unwrap();
+        let again = mapped_start(&prep, &base, 2e-4, map, &[0], &mut p, r, 8, &mut |q| {
+            residuals(q)
+        });
+        assert!(
+            again.after <= again.before && again.after < 1e-14,
+            "{again:?}"
+        );
+    }
+
+    fn beta_var(beta: f64) -> f64 {
+        crate::fit::map::beta_to_var(beta)
+    }
+
+    #[test]
+    fn a_raised_degree_gets_the_bootstrap_grid_of_starts() {
+        let map = StageMap {
+            dir: Direction::Warp,
+            xhat: 0.01,
+            c_known: false,
+            a12: A12Rule::HalfMin,
+        };
+        assert_eq!(starts(map, &[1.0, 0.2]).len(), 1);
+        let raised = map.raise(&[1.0, 0.2], 2.0);
+        let s = starts(map, &raised);
+        assert_eq!(s.len(), 13);
+        assert!(s
+            .iter()
+            .all(|q| q.len() == raised.len() && q[0] == 1.0 && q[2] == 0.2));
+        // a second term that already has weight is a fit, not a raise
+        let mut fitted = raised.clone();
+        fitted[1] = 0.4;
+        assert_eq!(starts(map, &fitted).len(), 1);
+    }
+}
