@@ -190,7 +190,8 @@ pub struct FitStats {
     pub seconds: f64,
     /// shell-model evaluations (every run of a strip or cantilever)
     pub evaluations: usize,
-    /// homogeneous-strip evaluations of the bootstrap (each a few microseconds)
+    /// homogeneous-strip evaluations (each a few microseconds): the bootstrap and the
+    /// space-mapped starts of the shell stages
     pub bootstrap_evaluations: usize,
     pub newton_iterations: usize,
     /// equilibria of the tensile stages that ended unstable (saddles of wrinkling strips):
