@@ -178,7 +178,7 @@ enum Command {
         /// carried to the finer one at order 2 on graded cages, 1.2 on uniform ones), `fine`
         /// (solved on the mesh twice as fine: measured, several times the cost) or `off`.
         /// Where the ladder stopped because the next level was solved and not needed, that
-        /// measured check is reported whatever the mode.
+        /// measured check is reported instead (in either mode but `off`).
         #[arg(long, value_enum, default_value = "coarse")]
         mesh_check: kshell::fit::MeshCheckMode,
         /// Strip cage grading towards the free edges and the jaws, "across,along", each in
