@@ -1,17 +1,28 @@
 //! The virtual lab (Clyde et al. 2017 §4): a tensile strip (ASTM D5035, `tensile.rs`) and a
 //! cantilever bend (ASTM D1388, `cantilever.rs`), each returning what the instrument measures.
-//! This module owns what they share: the model of a rectangular strip and the clamps.
+//! This module owns what they share: the model of a rectangular strip and the clamps. The
+//! paper's showcase scenes (§6, Figures 1 and 5) live beside them on square sheets (`sheet.rs`):
+//! the 1 m drape (`drape.rs`), the picture frame (`frame.rs`) and the corner pull
+//! (`corner.rs`), with the deformed surface's export (`export.rs`).
 //!
 //! Angles are measured from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
 //! axis is y; its weft direction is (sin θ, cos θ, 0) and its warp (cos θ, −sin θ, 0).
 
 mod cantilever;
+mod corner;
+mod drape;
+pub mod export;
+mod frame;
 pub mod plate;
 pub mod roof;
+pub mod sheet;
 pub mod sphere;
 mod tensile;
 
 pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMENT};
+pub use corner::{CornerPull, PullPoint};
+pub use drape::{Drape, DrapeShape};
+pub use frame::{Deformed, FramePoint, PictureFrame};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING};
 
 use crate::assembly::{ModelError, ShellModel};

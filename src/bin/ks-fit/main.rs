@@ -6,6 +6,7 @@ mod fabric;
 mod guard;
 mod mesh;
 mod scene;
+mod sheets;
 
 use clap::{Parser, Subcommand};
 use fabric::{cmd_check, cmd_fit, cmd_synth, fit_options};
@@ -99,6 +100,12 @@ enum Command {
     Converge {
         #[command(subcommand)]
         scene: ConvergeScene,
+    },
+    /// The paper's showcase scenes on a material: drape, picture-frame or corner-pull. Writes
+    /// the deformed surface (OBJ, PLY), the scene's CSV and scene.toml to --out; prints the CSV.
+    Scene {
+        #[command(subcommand)]
+        scene: sheets::ShowScene,
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
@@ -309,6 +316,7 @@ fn main() -> ExitCode {
             solve,
         } => cmd_bend(&material, angle, overhang, width, &solve).map(|()| true),
         Command::Converge { scene } => cmd_converge(scene, force).map(|()| true),
+        Command::Scene { scene } => sheets::cmd_scene(scene, force).map(|()| true),
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check {
             file,

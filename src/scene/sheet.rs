@@ -1,0 +1,241 @@
+//! Square sheets for the paper's showcase scenes (Clyde et al. 2017 §6, Figures 1 and 5): the
+//! model of an L × L square of fabric, warp along x and weft along y in its rest state (the xy
+//! plane), on a uniform n × n cage with the phantom boundary rule; a deterministic
+//! out-of-plane perturbation that picks a branch where a sheet buckles; and [`march`], which
+//! drives the held control points along a path in steps.
+//!
+//! With the phantom rule each boundary control row *is* the limit edge (the phantom row
+//! 2P₀ − P₁ makes (G + 4P₀ + P₁)/6 = P₀), and the limit surface is affine-invariant, so holding
+//! a boundary row at A·X + b holds the limit edge at exactly A·X + b.
+
+use super::{build_model, SceneError};
+use crate::assembly::{ShellModel, Want};
+use crate::material::FabricMaterial;
+use crate::mesh::Grading;
+use crate::solve::{newton, FreeSystem, NewtonOptions, SolveError, SolveReport};
+use crate::subdiv::BoundaryRule;
+use crate::Vec3;
+
+/// An L × L square of fabric on an n × n cage.
+pub struct Sheet {
+    pub model: ShellModel,
+    /// m
+    pub side: f64,
+    /// faces each way
+    pub n: usize,
+    /// control point of each lattice node (i, j), row-major in j
+    nodes: Vec<usize>,
+}
+
+impl Sheet {
+    pub fn new(material: &FabricMaterial, side: f64, n: usize) -> Result<Self, SceneError> {
+        super::positive("sheet side", side)?;
+        let model = build_model(
+            material,
+            side,
+            side,
+            0.0,
+            (n, n),
+            BoundaryRule::Phantom,
+            Grading::UNIFORM,
+        )?;
+        let h = side / n as f64;
+        let mut nodes = vec![usize::MAX; (n + 1) * (n + 1)];
+        for (v, p) in model.basis.control_points.iter().enumerate() {
+            let (i, j) = ((p[0] / h).round(), (p[1] / h).round());
+            if (0.0..=n as f64).contains(&i) && (0.0..=n as f64).contains(&j) {
+                nodes[j as usize * (n + 1) + i as usize] = v;
+            }
+        }
+        if nodes.contains(&usize::MAX) {
+            return Err(SceneError::Input(
+                "internal: a lattice node of the sheet has no control point".into(),
+            ));
+        }
+        Ok(Self {
+            model,
+            side,
+            n,
+            nodes,
+        })
+    }
+
+    /// The control point at lattice node (i, j), rest position (i, j) · side / n.
+    pub fn node(&self, i: usize, j: usize) -> usize {
+        self.nodes[j * (self.n + 1) + i]
+    }
+
+    /// Control points of the four edges, each once.
+    pub fn boundary(&self) -> Vec<usize> {
+        let n = self.n;
+        (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| (i, j)))
+            .filter(|&(i, j)| i == 0 || j == 0 || i == n || j == n)
+            .map(|(i, j)| self.node(i, j))
+            .collect()
+    }
+
+    pub fn rest(&self) -> &[Vec3] {
+        &self.model.basis.control_points
+    }
+
+    /// An out-of-plane offset per control point, zero on the boundary rows: the lowest mode
+    /// sin(πX/L) sin(πY/L) with seed 0, otherwise a pseudo-random sum of the modes
+    /// sin(mπX/L) sin(kπY/L), m, k ≤ 3, from `seed`; largest value 1.
+    pub fn perturbation(&self, seed: u64) -> Vec<f64> {
+        let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+        let mut next = || {
+            // xorshift64*: plenty for choosing a handful of mode amplitudes
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64 * 2.0
+                - 1.0
+        };
+        let mut modes = vec![(1.0, 1.0, 1.0)];
+        if seed != 0 {
+            modes = (1..=3)
+                .flat_map(|m| (1..=3).map(move |k| (m as f64, k as f64)))
+                .map(|(m, k)| (m, k, next()))
+                .collect();
+        }
+        let pi = std::f64::consts::PI;
+        let w: Vec<f64> = self
+            .rest()
+            .iter()
+            .map(|p| {
+                let (s, t) = (p[0] / self.side, p[1] / self.side);
+                let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
+                let shape: f64 = modes
+                    .iter()
+                    .map(|(m, k, c)| c * (m * pi * s).sin() * (k * pi * t).sin())
+                    .sum();
+                if inside {
+                    shape
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let top = w.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        w.iter().map(|v| v / top.max(f64::MIN_POSITIVE)).collect()
+    }
+
+    /// dW/dq: Σ rate · ∂E/∂x over the held DOFs whose motion per unit q is `rate` (the
+    /// generalised force the holders exert along q).
+    pub fn reaction(&self, x: &[Vec3], rate: &[(usize, f64)]) -> Result<f64, SceneError> {
+        let mut grad = vec![[0.0; 3]; x.len()];
+        self.model
+            .assemble(x, Want::Gradient, Some(&mut grad), None)
+            .map_err(|e| SceneError::Solve {
+                stage: "reaction".into(),
+                source: SolveError::StartOutOfDomain(e.to_string()),
+            })?;
+        Ok(rate.iter().map(|&(d, r)| r * grad[d / 3][d % 3]).sum())
+    }
+}
+
+/// Work done by the solver over a scene.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SolveCounts {
+    /// Equilibrium solves kept (load or motion steps, sub-steps included).
+    pub steps: usize,
+    /// Steps that failed and were cut into sub-steps.
+    pub cut_steps: usize,
+    pub iterations: usize,
+    pub factorizations: usize,
+    pub backward_euler_steps: usize,
+    pub saddle_escapes: usize,
+    /// Seconds in assembly and in factorisation, kept solves only.
+    pub assembly_seconds: f64,
+    pub factor_seconds: f64,
+}
+
+impl SolveCounts {
+    pub fn add(&mut self, r: &SolveReport) {
+        self.iterations += r.iterations;
+        self.factorizations += r.factorizations;
+        self.backward_euler_steps += r.backward_euler_steps;
+        self.saddle_escapes += r.saddle_escapes;
+        self.assembly_seconds += r.assembly_seconds;
+        self.factor_seconds += r.factor_seconds;
+    }
+}
+
+/// Drives the held DOFs along `place(t, dof)` (their position at path parameter t) from t = 0
+/// to 1 in `steps` equal steps, each solved from the secant prediction through the last two
+/// equilibria. A step that fails is cut into 2, 4, then 8 sub-steps. `each(t, x, report)` sees
+/// every equilibrium of the main steps. Returns the counts and the last solve's report.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn march(
+    model: &ShellModel,
+    system: &FreeSystem,
+    x: &mut Vec<Vec3>,
+    steps: usize,
+    solver: &NewtonOptions,
+    held: &[usize],
+    place: impl Fn(f64, usize) -> f64,
+    mut each: impl FnMut(f64, &[Vec3], &SolveReport) -> Result<(), SceneError>,
+) -> Result<(SolveCounts, SolveReport), SceneError> {
+    let mut counts = SolveCounts::default();
+    let mut last = SolveReport::default();
+    let mut previous: Option<(f64, Vec<Vec3>)> = None;
+    let mut t = 0.0;
+    for k in 1..=steps.max(1) {
+        let target = k as f64 / steps.max(1) as f64;
+        let mut solved = None;
+        let mut error = None;
+        for pieces in [1usize, 2, 4, 8] {
+            let (mut t_here, mut x_here, mut prev_here) = (t, x.clone(), previous.clone());
+            let mut kept = Vec::new();
+            let mut ok = true;
+            for p in 1..=pieces {
+                let tp = t + (target - t) * p as f64 / pieces as f64;
+                let mut trial = x_here.clone();
+                if let Some((t0, x0)) = &prev_here {
+                    let r = (tp - t_here) / (t_here - t0);
+                    for (a, b) in trial.iter_mut().zip(x0) {
+                        let now = *a;
+                        *a = std::array::from_fn(|c| now[c] + r * (now[c] - b[c]));
+                    }
+                }
+                for &d in held {
+                    trial[d / 3][d % 3] = place(tp, d);
+                }
+                match newton(model, system, &mut trial, solver) {
+                    Ok(report) => {
+                        kept.push(report);
+                        prev_here = Some((t_here, std::mem::replace(&mut x_here, trial)));
+                        t_here = tp;
+                    }
+                    Err(source) => {
+                        error.get_or_insert(SceneError::Solve {
+                            stage: format!("path parameter {tp:.4}"),
+                            source,
+                        });
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            if ok {
+                counts.cut_steps += usize::from(pieces > 1);
+                solved = Some((x_here, prev_here, kept));
+                break;
+            }
+        }
+        let Some((x_new, prev_new, kept)) = solved else {
+            return Err(error.unwrap_or_else(|| SceneError::Input("no step solved".into())));
+        };
+        for r in &kept {
+            counts.add(r);
+            counts.steps += 1;
+        }
+        last = kept.last().cloned().unwrap_or_default();
+        *x = x_new;
+        previous = prev_new;
+        t = target;
+        each(t, x, &last)?;
+    }
+    Ok((counts, last))
+}
