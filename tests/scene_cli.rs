@@ -1,0 +1,161 @@
+//! `ks-fit scene`: the outputs users load elsewhere (OBJ, PLY, CSV, scene.toml) and the
+//! automatic mesh choice, driven through the binary.
+
+mod common;
+
+use common::{folder, ks_fit, s};
+
+const COTTON: &str = "examples/materials/cotton.toml";
+
+#[test]
+fn a_forced_mesh_writes_the_surface_the_csv_and_the_report() {
+    let dir = folder("scene-forced");
+    let out = dir.join("frame");
+    let (rc, stdout, err) = ks_fit(&[
+        "scene",
+        "picture-frame",
+        "--material",
+        COTTON,
+        "--mesh",
+        "6x6",
+        "--steps",
+        "3",
+        "--shear-deg",
+        "30",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let rows: Vec<&str> = stdout.lines().collect();
+    assert_eq!(rows[0], "shear_angle_deg,shear_force_n,axial_force_n");
+    assert_eq!(rows.len(), 4, "{stdout}");
+    assert!(rows[3].starts_with("30.0000,"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("picture-frame.csv")).unwrap();
+    assert_eq!(csv, stdout, "the CSV file is what was printed");
+    let toml = std::fs::read_to_string(out.join("scene.toml")).unwrap();
+    for key in [
+        "scene = \"picture-frame\"",
+        "mesh = \"6x6\"",
+        "stable = true",
+        "[solver]",
+        "iterations = ",
+    ] {
+        assert!(toml.contains(key), "missing {key:?} in\n{toml}");
+    }
+    assert!(toml.contains("forced by --mesh"), "{toml}");
+    // 6 × 6 faces sampled 4 × 4 each, welded: 25 × 25 vertices
+    let obj = std::fs::read_to_string(out.join("shape.obj")).unwrap();
+    for (tag, n) in [("v ", 625), ("vn ", 625), ("vt ", 625), ("f ", 576)] {
+        assert_eq!(
+            obj.lines().filter(|l| l.starts_with(tag)).count(),
+            n,
+            "{tag}"
+        );
+    }
+    let ply = std::fs::read_to_string(out.join("shape.ply")).unwrap();
+    assert!(ply.starts_with("ply\nformat ascii 1.0\n"));
+    assert!(ply.contains("element vertex 625\n") && ply.contains("element face 576\n"));
+
+    // a second run may write over its own folder; a folder of other files is refused
+    let (rc, _, err) = ks_fit(&[
+        "scene",
+        "picture-frame",
+        "--material",
+        COTTON,
+        "--mesh",
+        "4",
+        "--steps",
+        "1",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let (rc, _, err) = ks_fit(&[
+        "scene",
+        "picture-frame",
+        "--material",
+        COTTON,
+        "--mesh",
+        "4",
+        "--out",
+        s(&dir),
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("not empty"), "{err}");
+}
+
+#[test]
+fn the_automatic_mesh_is_the_coarsest_meeting_the_tolerance_and_says_so() {
+    let dir = folder("scene-auto");
+    let out = dir.join("frame");
+    let run = |tol: &str| {
+        let (rc, _, err) = ks_fit(&[
+            "--force",
+            "scene",
+            "picture-frame",
+            "--material",
+            COTTON,
+            "--steps",
+            "1",
+            "--shear-deg",
+            "10",
+            "--tol",
+            tol,
+            "--out",
+            s(&out),
+        ]);
+        assert_eq!(rc, 0, "{err}");
+        (
+            err,
+            std::fs::read_to_string(out.join("scene.toml")).unwrap(),
+        )
+    };
+    let (err, toml) = run("0.01");
+    assert_eq!(toml.matches("[[ladder]]").count(), 3, "{toml}");
+    assert!(toml.contains("estimated_error = "), "{toml}");
+    assert!(err.contains("on 8x8 (automatic"), "{err}");
+    // a tolerance below the coarse mesh's estimated error moves the choice up the ladder
+    let coarse: f64 = toml
+        .split("[[ladder]]")
+        .nth(1)
+        .and_then(|l| l.split("estimated_error = ").nth(1))
+        .and_then(|v| v.lines().next())
+        .and_then(|v| v.trim().parse().ok())
+        .expect("the coarse level's estimate");
+    let (err, toml) = run(&format!("{}", coarse * 0.5));
+    assert!(!err.contains("on 8x8"), "{err}");
+    assert!(
+        toml.contains("mesh = \"16x16\"") || toml.contains("mesh = \"32x32\""),
+        "{toml}"
+    );
+}
+
+#[test]
+fn bad_scene_flags_are_one_line_errors_with_exit_code_2() {
+    for (args, says) in [
+        (vec!["--mesh", "8x9"], "square"),
+        (vec!["--mesh", "0"], "16x16"),
+        (vec!["--tol", "2"], "--tol"),
+        (vec!["--steps", "0"], "--steps"),
+        (vec!["--shear-deg", "95"], "--shear-deg"),
+    ] {
+        let mut all = vec!["scene", "picture-frame", "--material", COTTON];
+        all.extend(args.iter().copied());
+        let (rc, _, err) = ks_fit(&all);
+        assert_eq!(rc, 2, "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let (rc, _, err) = ks_fit(&[
+        "scene",
+        "corner-pull",
+        "--material",
+        COTTON,
+        "--stretch",
+        "0",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("--stretch"), "{err}");
+    let (rc, _, err) = ks_fit(&["scene", "drape", "--material", "no/such.toml"]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("no/such.toml"), "{err}");
+}
