@@ -6,8 +6,10 @@
 //! the material file; the paper's nonlinear η and the parameter derivatives the fitter needs
 //! extend [`Law`].
 
+pub mod arcsim;
 pub mod bending;
 mod file;
+pub mod json;
 mod orthotropic;
 
 pub use bending::BendingRigidity;

@@ -2,6 +2,7 @@
 //!
 //! Every user error is one line on stderr starting with `ks-fit: error:` and exit code 2.
 
+mod export;
 mod fabric;
 mod guard;
 mod mesh;
@@ -106,6 +107,24 @@ enum Command {
     Scene {
         #[command(subcommand)]
         scene: sheets::ShowScene,
+    },
+    /// Write a material in another simulator's format: `arcsim` (the JSON material of Wang et
+    /// al. 2011 that ARCSim reads; warp on u, weft on v). Prints how closely the format
+    /// reproduces the law's stress on uniaxial stretches up to --max-strain.
+    Export {
+        /// Material file (TOML).
+        #[arg(long)]
+        material: PathBuf,
+        /// Output format: arcsim.
+        #[arg(long)]
+        format: export::Format,
+        /// Output file.
+        #[arg(long)]
+        out: PathBuf,
+        /// Engineering strain up to which the format's stiffness ramps are fitted to the law
+        /// (the range the material was measured over; at most 1/6, where ARCSim's ramp ends).
+        #[arg(long, default_value_t = 0.08)]
+        max_strain: f64,
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
@@ -317,6 +336,12 @@ fn main() -> ExitCode {
         } => cmd_bend(&material, angle, overhang, width, &solve).map(|()| true),
         Command::Converge { scene } => cmd_converge(scene, force).map(|()| true),
         Command::Scene { scene } => sheets::cmd_scene(scene, force).map(|()| true),
+        Command::Export {
+            material,
+            format,
+            out,
+            max_strain,
+        } => export::cmd_export(&material, format, &out, max_strain, force).map(|()| true),
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check {
             file,
