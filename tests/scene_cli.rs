@@ -1,5 +1,5 @@
-//! `ks-fit scene`: the outputs users load elsewhere (OBJ, PLY, CSV, scene.toml) and the
-//! automatic mesh choice, driven through the binary.
+//! `ks-fit scene` and `ks-fit export`: the outputs users load elsewhere (OBJ, PLY, CSV,
+//! scene.toml, ARCSim JSON) and the automatic mesh choice, driven through the binary.
 
 mod common;
 
@@ -158,4 +158,50 @@ fn bad_scene_flags_are_one_line_errors_with_exit_code_2() {
     let (rc, _, err) = ks_fit(&["scene", "drape", "--material", "no/such.toml"]);
     assert_eq!(rc, 2);
     assert!(err.contains("no/such.toml"), "{err}");
+}
+
+#[test]
+fn export_writes_an_arcsim_file_reads_it_back_and_reports_the_deviation() {
+    let dir = folder("export");
+    let out = dir.join("cotton.json");
+    let (rc, _, err) = ks_fit(&[
+        "export",
+        "--material",
+        COTTON,
+        "--format",
+        "arcsim",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    // the example cotton is linear: the format holds it exactly
+    assert!(err.contains("within 0.00 %"), "{err}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let back = kshell::material::arcsim::ArcsimMaterial::parse(&text).unwrap();
+    assert!((back.density - 0.1036).abs() < 1e-12);
+    // 2·D₀ = τ a11 = 0.18 mm × 200 MPa (examples/materials/cotton.toml)
+    assert!((2.0 * back.stretching[0][0] - 3.6e4).abs() < 1e-6);
+    let (rc, _, err) = ks_fit(&[
+        "export",
+        "--material",
+        COTTON,
+        "--format",
+        "obj",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(rc, 2, "{err}");
+    let (rc, _, err) = ks_fit(&[
+        "export",
+        "--material",
+        COTTON,
+        "--format",
+        "arcsim",
+        "--out",
+        s(&out),
+        "--max-strain",
+        "0.5",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("strain range"), "{err}");
 }
