@@ -205,3 +205,67 @@ fn export_writes_an_arcsim_file_reads_it_back_and_reports_the_deviation() {
     assert_eq!(rc, 2);
     assert!(err.contains("strain range"), "{err}");
 }
+
+/// The heavy elastica: a cantilever of twice its bending length c = (B/w)^(1/3) hangs with its
+/// chord at 41.4873° (the ASTM D1388 design point, Peirce 1930's 41.5°; to 1e-4 by RK4
+/// shooting on the heavy elastica θ'' = −λ(1−σ) cos θ, λ = 8: `tests/cantilever.rs`). B = E τ³/12 = 2e7 Pa · (0.2 mm)³/12, w = 100 g/m²
+/// · g: 2c = 47.7349 mm. On the old default mesh (4 × 8) the angle was 40.86°, 0.63° off.
+#[test]
+fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
+    let dir = folder("bend-auto");
+    let m = dir.join("heavy.toml");
+    std::fs::write(
+        &m,
+        "name = \"heavy\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 2e7\na22_pa = 2e7\na12_pa = 0\ng12_pa = 1e7\n",
+    )
+    .unwrap();
+    let args = [
+        "bend",
+        "--material",
+        s(&m),
+        "--angle",
+        "90",
+        "--overhang",
+        "47.7349",
+        "--width",
+        "25",
+    ];
+    let (rc, out, err) = ks_fit(&args);
+    assert_eq!(rc, 0, "{err}");
+    let angle: f64 = out
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((angle - 41.4873).abs() < 0.05, "{angle}° ({err})");
+    assert!(
+        err.contains("chosen from 4x8") && err.contains("< --tol 0.05°"),
+        "{err}"
+    );
+    // a tighter tolerance moves up the ladder; --mesh forces one and says nothing
+    let mut tight = args.to_vec();
+    tight.extend(["--tol", "0.001"]);
+    let (_, _, err) = ks_fit(&tight);
+    assert!(err.contains("mesh 16x32 chosen"), "{err}");
+    let mut forced = args.to_vec();
+    forced.extend(["--mesh", "4x8"]);
+    let (_, out, err) = ks_fit(&forced);
+    assert!(!err.contains("chosen"), "{err}");
+    let coarse: f64 = out
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (coarse - 41.4873).abs() > 0.3,
+        "{coarse}°: the coarse mesh misses"
+    );
+}

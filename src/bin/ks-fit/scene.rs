@@ -15,8 +15,8 @@ use std::time::Instant;
 /// Options shared by the scene commands.
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip,
-    /// elements of about 6.25 mm for a cantilever).
+    /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip; for
+    /// a cantilever the automatic choice, see --tol).
     #[arg(long, value_parser = parse_mesh)]
     mesh: Option<(usize, usize)>,
     /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
@@ -28,6 +28,11 @@ pub struct SceneArgs {
     /// accurate on the same mesh).
     #[arg(long, value_parser = crate::parse_grading)]
     grading: Option<kshell::mesh::Grading>,
+    /// Cantilevers without --mesh: the drape-angle error (degrees) the automatic mesh must
+    /// meet. Three meshes are solved (elements of about 6.25 mm, then twice and four times as
+    /// fine), each one's error estimated by Richardson, and the coarsest within it kept.
+    #[arg(long, default_value_t = 0.05)]
+    tol: f64,
     /// Report each solve on stderr.
     #[arg(short, long)]
     verbose: bool,
@@ -288,7 +293,10 @@ pub fn cmd_bend(
         bend.boundary = b;
     }
     bend.solver = args.solver();
-    let r = bend.run(&mat).map_err(|e| e.to_string())?;
+    let r = match args.mesh {
+        Some(_) => bend.run(&mat).map_err(|e| e.to_string())?,
+        None => auto_bend(&bend, &mat, args)?,
+    };
     if args.verbose {
         eprintln!(
             "{} load steps, {} iterations in all; last solve: {}",
@@ -305,6 +313,89 @@ pub fn cmd_bend(
         vec![kshell::io::num(overhang)]
     };
     unstable_error("the cantilever's equilibrium", &saddle, "at overhang {} mm")
+}
+
+/// The cantilever on three meshes (the default, then twice and four times as fine each way),
+/// keeping the coarsest whose Richardson estimate of the drape-angle error is below `--tol`
+/// degrees (the finest, with a warning, where none is or there is no estimate).
+fn auto_bend(
+    bend: &CantileverBend,
+    mat: &kshell::material::FabricMaterial,
+    args: &SceneArgs,
+) -> Result<kshell::scene::BendResult, String> {
+    if !(args.tol.is_finite() && args.tol > 0.0) {
+        return Err(format!(
+            "--tol must be a positive number of degrees, got {}",
+            args.tol
+        ));
+    }
+    let (nx, ny) = bend.mesh;
+    let mut runs = Vec::new();
+    for k in 0..3 {
+        let mesh = (nx << k, ny << k);
+        kshell::limits::check_mesh(&format!("mesh {}x{}", mesh.0, mesh.1), mesh.0, mesh.1)?;
+        let b = CantileverBend {
+            mesh,
+            ..bend.clone()
+        };
+        let t0 = Instant::now();
+        let r = b.run(mat).map_err(|e| e.to_string())?;
+        if args.verbose {
+            eprintln!(
+                "ks-fit: bend: {}x{}: {:.6}° ({:.2} s)",
+                mesh.0,
+                mesh.1,
+                r.drape_angle_deg,
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        runs.push((mesh, r, t0.elapsed().as_secs_f64()));
+    }
+    let levels = runs
+        .iter()
+        .map(|(mesh, r, secs)| kshell::converge::Level {
+            mesh: *mesh,
+            dofs: 0,
+            seconds: *secs,
+            qoi: r.drape_angle_deg,
+            diff_to_next: None,
+            est_error: None,
+            order: None,
+        })
+        .collect();
+    let study = kshell::converge::analyse(levels);
+    let errors: Vec<Option<f64>> = match study.extrapolated {
+        Some(q) => runs
+            .iter()
+            .map(|(_, r, _)| Some((r.drape_angle_deg - q).abs()))
+            .collect(),
+        None => vec![None; 3],
+    };
+    let pick = errors.iter().position(|e| e.is_some_and(|e| e < args.tol));
+    let i = pick.unwrap_or(2);
+    let (mesh, _, _) = runs[i];
+    let said = match (pick, errors[i]) {
+        (Some(_), Some(e)) => format!("estimated error {e:.3}° < --tol {}°", args.tol),
+        (None, Some(e)) => format!(
+            "WARNING: no mesh meets --tol {}°; the finest, estimated error {e:.3}°",
+            args.tol
+        ),
+        _ => {
+            "WARNING: the three angles do not converge monotonically, no error estimate; the finest"
+                .into()
+        }
+    };
+    let all: Vec<String> = runs
+        .iter()
+        .map(|(m, r, _)| format!("{}x{} {:.4}°", m.0, m.1, r.drape_angle_deg))
+        .collect();
+    eprintln!(
+        "ks-fit: bend: mesh {}x{} chosen from {} ({said})",
+        mesh.0,
+        mesh.1,
+        all.join(", ")
+    );
+    Ok(runs.swap_remove(i).1)
 }
 
 pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
