@@ -2,7 +2,7 @@
 
 use super::{table, Method, Row};
 use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};
-use crate::scene::{CantileverBend, SceneError, TensileStrip};
+use crate::scene::{CantileverBend, CornerPull, Drape, PictureFrame, SceneError, TensileStrip};
 use crate::solve::SolveReport;
 use std::time::Instant;
 
@@ -31,6 +31,13 @@ pub enum Case {
     /// (20 µm: a11 = 2e10 Pa, the order of aramid or glass yarns, about the thinnest fabric;
     /// 5 µm: 1.3e12 Pa, past any fabric). Where f64 refinement stops being enough, if anywhere.
     ThinD1388 { tau_um: u16 },
+    /// The paper's drape (Figure 1) of the stiffening material: a 1 m sheet hanging from two
+    /// corners brought 60 cm apart in eight steps; it buckles and folds at every step.
+    Drape,
+    /// The picture frame (Figure 5) sheared to 40° in eight steps: the sheet wrinkles.
+    PictureFrame,
+    /// The corner pull (Figure 5) to 10 % of the diagonal in eight steps: diagonal wrinkles.
+    CornerPull,
 }
 
 impl Case {
@@ -46,6 +53,9 @@ impl Case {
             Case::CutoffCrossing,
             Case::ThinD1388 { tau_um: 20 },
             Case::ThinD1388 { tau_um: 5 },
+            Case::Drape,
+            Case::PictureFrame,
+            Case::CornerPull,
         ]
     }
 
@@ -68,6 +78,9 @@ impl Case {
             Case::ThinD1388 { tau_um } => {
                 format!("heavy D1388 cantilever, τ = {tau_um} µm (same rigidity)")
             }
+            Case::Drape => "drape, 1 m sheet, corners to 60 cm".into(),
+            Case::PictureFrame => "picture frame, 10 cm, sheared to 40°".into(),
+            Case::CornerPull => "corner pull, 10 cm, to 10 %".into(),
         }
     }
 
@@ -81,6 +94,9 @@ impl Case {
             Case::Compression => "compression".into(),
             Case::CutoffCrossing => "cut-off".into(),
             Case::ThinD1388 { tau_um } => format!("D1388 {tau_um} µm"),
+            Case::Drape => "drape".into(),
+            Case::PictureFrame => "frame".into(),
+            Case::CornerPull => "corner".into(),
         }
     }
 
@@ -107,6 +123,9 @@ impl Case {
         let outcome = match self {
             Case::CantileverFullGravity | Case::HeavyD1388 | Case::ThinD1388 { .. } => {
                 self.cantilever(method, reduced, &mut row, &mut fallbacks)
+            }
+            Case::Drape | Case::PictureFrame | Case::CornerPull => {
+                self.sheet(method, reduced, &mut row, &mut fallbacks)
             }
             _ => self.strip(method, reduced, &mut row, &mut fallbacks),
         };
@@ -216,6 +235,63 @@ impl Case {
         row.load_steps = r.load_steps;
         row.drape_angle_deg = Some(r.drape_angle_deg);
         fallbacks.push(r.report);
+        Ok(())
+    }
+}
+
+impl Case {
+    /// The showcase scenes on the stiffening material (`reduced`: 8 × 8, 10 × 10 for the
+    /// corner pull; else twice as fine).
+    fn sheet(
+        &self,
+        method: &Method,
+        reduced: bool,
+        row: &mut Row,
+        fallbacks: &mut Vec<SolveReport>,
+    ) -> Result<(), SceneError> {
+        let m = stiffening();
+        let k = if reduced { 1 } else { 2 };
+        let deformed = match self {
+            Case::Drape => {
+                let d = Drape {
+                    mesh: 8 * k,
+                    solver: method.options,
+                    ..Drape::new()
+                };
+                d.run(&m)?.1
+            }
+            Case::PictureFrame => {
+                let f = PictureFrame {
+                    mesh: 8 * k,
+                    solver: method.options,
+                    ..PictureFrame::new(0.1, 40.0)
+                };
+                f.run(&m)?.1
+            }
+            _ => {
+                let c = CornerPull {
+                    mesh: 10 * k,
+                    solver: method.options,
+                    ..CornerPull::new(0.1, 0.1)
+                };
+                c.run(&m)?.1
+            }
+        };
+        let c = &deformed.counts;
+        row.iterations = c.iterations;
+        row.factorizations = c.factorizations;
+        row.load_steps = c.steps;
+        row.backward_euler_steps = c.backward_euler_steps;
+        row.saddle_escapes = c.saddle_escapes;
+        row.stable = deformed.stable;
+        row.residual = deformed.last.residual;
+        row.refinement_steps = deformed.last.refinement_steps;
+        // every kept solve's reasons for backward Euler, on the last solve's report
+        fallbacks.push(SolveReport {
+            fallbacks: c.fallbacks.clone(),
+            curvature_steps: c.curvature_steps,
+            ..deformed.last.clone()
+        });
         Ok(())
     }
 }

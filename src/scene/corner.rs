@@ -140,6 +140,7 @@ impl CornerPull {
                 x,
                 counts,
                 stable: last.stable,
+                last,
             },
         ))
     }

@@ -89,6 +89,8 @@ impl Drape {
         counts.iterations += weight.iterations;
         counts.factorizations += weight.factorizations;
         counts.backward_euler_steps += weight.last.backward_euler_steps;
+        counts.fallbacks = weight.last.fallbacks.clone();
+        counts.curvature_steps += weight.last.curvature_steps;
         for (p, b) in x.iter_mut().zip(&bump) {
             p[1] += self.perturbation * l * b;
         }
@@ -111,14 +113,7 @@ impl Drape {
             place,
             |_, _, _| Ok(()),
         )?;
-        counts.steps += more.steps;
-        counts.cut_steps += more.cut_steps;
-        counts.iterations += more.iterations;
-        counts.factorizations += more.factorizations;
-        counts.backward_euler_steps += more.backward_euler_steps;
-        counts.saddle_escapes += more.saddle_escapes;
-        counts.assembly_seconds += more.assembly_seconds;
-        counts.factor_seconds += more.factor_seconds;
+        counts.merge(&more);
         let shape = measure(&sheet, &x, last.clone())?;
         let stable = last.stable;
         Ok((
@@ -128,6 +123,7 @@ impl Drape {
                 x,
                 counts,
                 stable,
+                last,
             },
         ))
     }

@@ -58,6 +58,8 @@ pub struct Deformed {
     pub counts: SolveCounts,
     /// The final equilibrium's reduced Hessian is positive definite.
     pub stable: bool,
+    /// The final solve.
+    pub last: SolveReport,
 }
 
 impl PictureFrame {
@@ -161,6 +163,7 @@ impl PictureFrame {
                 x,
                 counts,
                 stable: last.stable,
+                last,
             },
         ))
     }

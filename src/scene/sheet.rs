@@ -12,7 +12,7 @@ use super::{build_model, SceneError};
 use crate::assembly::{ShellModel, Want};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
-use crate::solve::{newton, FreeSystem, NewtonOptions, SolveError, SolveReport};
+use crate::solve::{newton, FallbackCounts, FreeSystem, NewtonOptions, SolveError, SolveReport};
 use crate::subdiv::BoundaryRule;
 use crate::Vec3;
 
@@ -146,20 +146,47 @@ pub struct SolveCounts {
     pub factorizations: usize,
     pub backward_euler_steps: usize,
     pub saddle_escapes: usize,
+    /// Why backward Euler was used, over the kept solves.
+    pub fallbacks: FallbackCounts,
+    pub curvature_steps: usize,
     /// Seconds in assembly and in factorisation, kept solves only.
     pub assembly_seconds: f64,
     pub factor_seconds: f64,
 }
 
 impl SolveCounts {
+    /// Adds another run's counts.
+    pub fn merge(&mut self, o: &SolveCounts) {
+        self.steps += o.steps;
+        self.cut_steps += o.cut_steps;
+        self.iterations += o.iterations;
+        self.factorizations += o.factorizations;
+        self.backward_euler_steps += o.backward_euler_steps;
+        self.saddle_escapes += o.saddle_escapes;
+        add_fallbacks(&mut self.fallbacks, &o.fallbacks);
+        self.curvature_steps += o.curvature_steps;
+        self.assembly_seconds += o.assembly_seconds;
+        self.factor_seconds += o.factor_seconds;
+    }
+
+    /// Adds one kept solve.
     pub fn add(&mut self, r: &SolveReport) {
         self.iterations += r.iterations;
         self.factorizations += r.factorizations;
         self.backward_euler_steps += r.backward_euler_steps;
         self.saddle_escapes += r.saddle_escapes;
+        add_fallbacks(&mut self.fallbacks, &r.fallbacks);
+        self.curvature_steps += r.curvature_steps;
         self.assembly_seconds += r.assembly_seconds;
         self.factor_seconds += r.factor_seconds;
     }
+}
+
+fn add_fallbacks(a: &mut FallbackCounts, b: &FallbackCounts) {
+    a.indefinite += b.indefinite;
+    a.ascent += b.ascent;
+    a.stagnation += b.stagnation;
+    a.short_step += b.short_step;
 }
 
 /// Drives the held DOFs along `place(t, dof)` (their position at path parameter t) from t = 0
