@@ -33,7 +33,7 @@ for fabric in canvas cotton silk denim wool; do
       continue
     fi
     secs=$(echo "$(date +%s.%N) - $start" | bc)
-    get() { grep -m1 "^$1 = " "$out/scene.toml" | sed "s/^$1 = //; s/\"//g"; }
+    get() { grep -m1 "^$1 = " "$out/scene.toml" | sed "s/^$1 = //; s/\"//g" || true; }
     ladder=$(awk '/^\[\[ladder\]\]/{l=1} l && /^qoi = /{printf "%s%.4g", s, $3; s=", "}' "$out/scene.toml")
     est=$(get estimated_error); est=${est:-none}
     printf "| %s | %s | %s | %.4g | %s | %s | %s | %s | %s | %.1f |\n" "$fabric" "$scene" \
