@@ -91,15 +91,8 @@ impl CornerPull {
             .filter(|&v| side_of(&rest[v]) != 0.0)
             .flat_map(|v| 3 * v..3 * v + 3)
             .collect();
-        let mut fixed = vec![false; 3 * rest.len()];
-        held.iter().for_each(|&d| fixed[d] = true);
-        let system = super::free_system(&sheet.model, &fixed, Vec::new())?;
-        let bump = sheet.perturbation(self.seed);
-        let mut x: Vec<Vec3> = rest
-            .iter()
-            .zip(&bump)
-            .map(|(p, b)| [p[0], p[1], self.perturbation * self.side * b])
-            .collect();
+        let system = sheet.system(&held, false)?;
+        let mut x = sheet.lifted(self.perturbation, self.seed);
         let total = self.stretch * l * std::f64::consts::SQRT_2;
         let unit = std::f64::consts::FRAC_1_SQRT_2;
         // ∂x/∂δ of each held DOF: ±½ along the diagonal
@@ -133,15 +126,6 @@ impl CornerPull {
                 Ok(())
             },
         )?;
-        Ok((
-            points,
-            Deformed {
-                sheet,
-                x,
-                counts,
-                stable: last.stable,
-                last,
-            },
-        ))
+        Ok((points, Deformed::new(sheet, x, counts, last)))
     }
 }

@@ -74,9 +74,7 @@ impl Drape {
         let (n, l) = (self.mesh, self.side);
         let corners = [sheet.node(0, n), sheet.node(n, n)];
         let held: Vec<usize> = corners.iter().flat_map(|&v| 3 * v..3 * v + 3).collect();
-        let mut fixed = vec![false; 3 * sheet.rest().len()];
-        held.iter().for_each(|&d| fixed[d] = true);
-        let system = super::free_system(&sheet.model, &fixed, Vec::new())?;
+        let system = sheet.system(&held, false)?;
         let bump = sheet.perturbation(self.seed);
         // the weight comes on with the sheet flat (an in-plane problem); the offset is added
         // before the corners move: on a vertical sheet with no load the turn about the line
@@ -115,17 +113,7 @@ impl Drape {
         )?;
         counts.merge(&more);
         let shape = measure(&sheet, &x, last.clone())?;
-        let stable = last.stable;
-        Ok((
-            shape,
-            Deformed {
-                sheet,
-                x,
-                counts,
-                stable,
-                last,
-            },
-        ))
+        Ok((shape, Deformed::new(sheet, x, counts, last)))
     }
 }
 

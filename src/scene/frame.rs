@@ -62,6 +62,18 @@ pub struct Deformed {
     pub last: SolveReport,
 }
 
+impl Deformed {
+    pub fn new(sheet: Sheet, x: Vec<Vec3>, counts: SolveCounts, last: SolveReport) -> Self {
+        Self {
+            sheet,
+            x,
+            counts,
+            stable: last.stable,
+            last,
+        }
+    }
+}
+
 impl PictureFrame {
     pub fn new(side: f64, shear_deg: f64) -> Self {
         Self {
@@ -92,22 +104,14 @@ impl PictureFrame {
             .iter()
             .flat_map(|&v| 3 * v..3 * v + 3)
             .collect();
-        let mut fixed = vec![false; 3 * sheet.rest().len()];
-        held.iter().for_each(|&d| fixed[d] = true);
-        if self.in_plane {
-            fixed.iter_mut().skip(2).step_by(3).for_each(|f| *f = true);
-        }
-        let system = super::free_system(&sheet.model, &fixed, Vec::new())?;
+        let system = sheet.system(&held, self.in_plane)?;
         let rest = sheet.rest().to_vec();
-        let bump = sheet.perturbation(self.seed);
-        let mut x: Vec<Vec3> = rest
-            .iter()
-            .zip(&bump)
-            .map(|(p, b)| {
-                let w = if self.in_plane { 0.0 } else { *b };
-                [p[0], p[1], self.perturbation * self.side * w]
-            })
-            .collect();
+        let lift = if self.in_plane {
+            0.0
+        } else {
+            self.perturbation
+        };
+        let mut x = sheet.lifted(lift, self.seed);
         let gamma = |t: f64| (t * self.shear_deg).to_radians();
         let place = |t: f64, d: usize| {
             let (p, g) = (rest[d / 3], gamma(t));
@@ -156,15 +160,6 @@ impl PictureFrame {
                 Ok(())
             },
         )?;
-        Ok((
-            points,
-            Deformed {
-                sheet,
-                x,
-                counts,
-                stable: last.stable,
-                last,
-            },
-        ))
+        Ok((points, Deformed::new(sheet, x, counts, last)))
     }
 }

@@ -121,6 +121,26 @@ impl Sheet {
         w.iter().map(|v| v / top.max(f64::MIN_POSITIVE)).collect()
     }
 
+    /// The free system with the DOFs `held` (and, when `in_plane`, every z) fixed.
+    pub(crate) fn system(&self, held: &[usize], in_plane: bool) -> Result<FreeSystem, SceneError> {
+        let mut fixed = vec![false; 3 * self.rest().len()];
+        held.iter().for_each(|&d| fixed[d] = true);
+        if in_plane {
+            fixed.iter_mut().skip(2).step_by(3).for_each(|f| *f = true);
+        }
+        super::free_system(&self.model, &fixed, Vec::new())
+    }
+
+    /// The rest state lifted along z by `amplitude` × side × [`Sheet::perturbation`]`(seed)`.
+    pub fn lifted(&self, amplitude: f64, seed: u64) -> Vec<Vec3> {
+        let w = self.perturbation(seed);
+        self.rest()
+            .iter()
+            .zip(&w)
+            .map(|(p, w)| [p[0], p[1], amplitude * self.side * w])
+            .collect()
+    }
+
     /// dW/dq: Σ rate · ∂E/∂x over the held DOFs whose motion per unit q is `rate` (the
     /// generalised force the holders exert along q).
     pub fn reaction(&self, x: &[Vec3], rate: &[(usize, f64)]) -> Result<f64, SceneError> {
