@@ -31,6 +31,8 @@ pub struct CornerPull {
     /// [`Sheet::perturbation`])
     pub perturbation: f64,
     pub seed: u64,
+    /// Hold every control point in the plane: the membrane response alone, no wrinkles.
+    pub in_plane: bool,
     pub solver: NewtonOptions,
 }
 
@@ -54,6 +56,7 @@ impl CornerPull {
             mesh: 10,
             perturbation: 1e-3,
             seed: 0,
+            in_plane: false,
             solver: NewtonOptions::default(),
         }
     }
@@ -91,8 +94,13 @@ impl CornerPull {
             .filter(|&v| side_of(&rest[v]) != 0.0)
             .flat_map(|v| 3 * v..3 * v + 3)
             .collect();
-        let system = sheet.system(&held, false)?;
-        let mut x = sheet.lifted(self.perturbation, self.seed);
+        let system = sheet.system(&held, self.in_plane)?;
+        let lift = if self.in_plane {
+            0.0
+        } else {
+            self.perturbation
+        };
+        let mut x = sheet.lifted(lift, self.seed);
         let total = self.stretch * l * std::f64::consts::SQRT_2;
         let unit = std::f64::consts::FRAC_1_SQRT_2;
         // ∂x/∂δ of each held DOF: ±½ along the diagonal
