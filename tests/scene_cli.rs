@@ -269,3 +269,36 @@ fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
         "{coarse}°: the coarse mesh misses"
     );
 }
+
+#[test]
+fn a_frame_past_the_materials_shear_cut_off_is_warned_about() {
+    let dir = folder("frame-cutoff");
+    let m = dir.join("m.toml");
+    std::fs::write(
+        &m,
+        "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\na12_pa = 0\ng12_pa = 2e6\n[cutoffs]\ne11_max = 0.1\ne22_max = 0.1\ne12_max = 0.1\n",
+    )
+    .unwrap();
+    let run = |deg: &str| {
+        let out = dir.join(format!("f{deg}"));
+        let (rc, _, err) = ks_fit(&[
+            "scene",
+            "picture-frame",
+            "--material",
+            s(&m),
+            "--mesh",
+            "4",
+            "--steps",
+            "1",
+            "--shear-deg",
+            deg,
+            "--out",
+            s(&out),
+        ]);
+        assert_eq!(rc, 0, "{err}");
+        err
+    };
+    // sin 30° / 2 = 0.25 > 0.1; sin 10° / 2 = 0.087 < 0.1
+    assert!(run("30").contains("past the material's shear cut-off 0.100"));
+    assert!(!run("10").contains("warning"));
+}

@@ -242,6 +242,16 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
     scene.check()?;
     let a = scene.args();
     let material = load_material(&a.material).map_err(|e| e.to_string())?;
+    if let ShowScene::PictureFrame { shear_deg, .. } = &scene {
+        // a sheet that follows the frame has Ẽ₁₂ = sin γ / 2 (wrinkles only relieve it)
+        let e12 = shear_deg.to_radians().sin().abs() / 2.0;
+        let limit = material.law.cutoffs.e12.1;
+        if e12 > limit {
+            eprintln!(
+                "ks-fit: warning: the frame shears the sheet to Ẽ12 = {e12:.3}, past the material's shear cut-off {limit:.3} (the end of its measured range): the response there is the law's extrapolation"
+            );
+        }
+    }
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(scene.name()));
     let mut guard = Guard::new(force);
     guard.input(&a.material);
