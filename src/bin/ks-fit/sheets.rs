@@ -40,7 +40,8 @@ pub struct ShowArgs {
     /// buckles: 0 the lowest mode, any other value a pseudo-random mix of low modes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Report each mesh and solve on stderr.
+    /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
+    /// is reported anyway).
     #[arg(short, long)]
     verbose: bool,
 }
@@ -277,21 +278,28 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
             for k in 0..3 {
                 let n = scene.base_mesh() << k;
                 let run = scene.run(&material, n).map_err(|e| fail(n, e))?;
-                if a.verbose {
-                    eprintln!(
-                        "ks-fit: scene: {n}x{n}: {} = {:.6}, {:.2} s, {} solver iterations, stable {}",
-                        scene.qoi_name(),
-                        run.qoi,
-                        run.seconds,
-                        run.deformed.counts.iterations,
-                        run.deformed.stable
-                    );
-                }
+                // one line per mesh: the ladder's last mesh can take minutes
+                eprintln!(
+                    "ks-fit: scene: {n}x{n}: {} = {:.6}, {:.2} s, {} solver iterations, stable {}",
+                    scene.qoi_name(),
+                    run.qoi,
+                    run.seconds,
+                    run.deformed.counts.iterations,
+                    run.deformed.stable
+                );
                 runs.push((n, run));
             }
             choose(&scene, a.tol, runs)
         }
     };
+    if a.verbose {
+        let c = &run.deformed.counts;
+        eprintln!(
+            "ks-fit: scene: {} solves ({} cut into sub-steps), {} iterations, {} factorisations, {} backward-Euler and {} negative-curvature steps, {} saddle escapes; {:.2} s assembling, {:.2} s factorising",
+            c.steps, c.cut_steps, c.iterations, c.factorizations, c.backward_euler_steps,
+            c.curvature_steps, c.saddle_escapes, c.assembly_seconds, c.factor_seconds
+        );
+    }
     write_outputs(&scene, &out, &run, &choice, t0.elapsed().as_secs_f64())?;
     print!("{}", run.csv);
     eprintln!(
