@@ -25,6 +25,7 @@ pub mod io;
 pub mod limits;
 pub mod material;
 pub mod mesh;
+pub mod model;
 pub mod quadrature;
 pub mod scene;
 pub mod shell;

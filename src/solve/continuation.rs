@@ -3,7 +3,7 @@
 use super::{
     newton, FreeSystem, NewtonOptions, SolveError, SolveReport, Strategy, FULL_STEP_ITERATIONS,
 };
-use crate::assembly::ShellModel;
+use crate::model::ClothModel;
 use crate::Vec3;
 
 /// What a continuation did.
@@ -41,13 +41,13 @@ pub const ADAPTIVE_TOL: f64 = 0.3;
 /// and the error. With [`Strategy::FullStep`] or [`Strategy::TrustRegion`] (and `max_step` 1)
 /// the whole load is tried first, by full-step Newton or the trust region; its iterations count
 /// in the report whether it is kept or not.
-pub fn continuation(
-    model: &mut ShellModel,
+pub fn continuation<M: ClothModel>(
+    model: &mut M,
     system: &FreeSystem,
     x: &mut Vec<Vec3>,
     solver: &NewtonOptions,
     max_step: f64,
-    mut apply: impl FnMut(&mut ShellModel, f64, &[Vec3]),
+    mut apply: impl FnMut(&mut M, f64, &[Vec3]),
 ) -> Result<ContinuationReport, (f64, SolveError)> {
     let opts = NewtonOptions {
         max_iterations: solver.max_iterations.min(30),
@@ -111,12 +111,12 @@ pub fn continuation(
 /// The whole load in one solve, by full-step Newton ([`Strategy::FullStep`]) or the trust region
 /// ([`Strategy::TrustRegion`]); `Some` when that reached a stable equilibrium. The attempt's
 /// cost is added to `report` either way.
-fn whole_load(
-    model: &mut ShellModel,
+fn whole_load<M: ClothModel>(
+    model: &mut M,
     system: &FreeSystem,
     x: &mut Vec<Vec3>,
     solver: &NewtonOptions,
-    apply: &mut impl FnMut(&mut ShellModel, f64, &[Vec3]),
+    apply: &mut impl FnMut(&mut M, f64, &[Vec3]),
     report: &mut ContinuationReport,
 ) -> Option<ContinuationReport> {
     let opts = match solver.strategy {

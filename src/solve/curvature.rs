@@ -7,7 +7,7 @@
 //! step moves the whole way down the unstable direction at once.
 
 use super::{FreeSystem, SolveReport};
-use crate::assembly::ShellModel;
+use crate::model::ClothModel;
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -68,7 +68,7 @@ pub(super) fn direction(
 /// 1e-4 of the quadratic model's drop; moves `x` and returns true when it does.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn search(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     trial: &mut [Vec3],

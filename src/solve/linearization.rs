@@ -2,7 +2,8 @@
 //! sensitivity system of Clyde et al. 2017, Eq. 6).
 
 use super::{refine, FreeSystem, Precision, SolveError};
-use crate::assembly::{BlockMatrix, ShellModel, Want};
+use crate::assembly::{BlockMatrix, Want};
+use crate::model::ClothModel;
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -20,7 +21,11 @@ pub struct Linearization {
 impl Linearization {
     /// Assembles and factorises at `x` (an equilibrium of `system`). Fails if K is not
     /// positive definite: a saddle has no unique sensitivity.
-    pub fn new(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<Self, SolveError> {
+    pub fn new(
+        model: &dyn ClothModel,
+        system: &FreeSystem,
+        x: &[Vec3],
+    ) -> Result<Self, SolveError> {
         let (hessian, values) = Self::assemble(model, system, x)?;
         let llt = system.try_factor(&values)?.ok_or_else(|| {
             SolveError::Linear("the equilibrium's Hessian is not positive definite".into())
@@ -34,12 +39,12 @@ impl Linearization {
 
     /// The full Hessian at `x` and the reduced K's values.
     fn assemble(
-        model: &ShellModel,
+        model: &dyn ClothModel,
         system: &FreeSystem,
         x: &[Vec3],
     ) -> Result<(BlockMatrix, Vec<f64>), SolveError> {
         let mut grad = vec![[0.0; 3]; model.num_nodes()];
-        let mut hessian = BlockMatrix::zeros(model.pattern.clone());
+        let mut hessian = BlockMatrix::zeros(model.pattern().clone());
         model
             .assemble(x, Want::Hessian, Some(&mut grad), Some(&mut hessian))
             .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
@@ -54,7 +59,7 @@ impl Linearization {
     /// sensitivities of a regularised tangent, for a minimiser's search direction only.
     /// Returns the linearization and σ (0 when none was needed).
     pub fn new_regularized(
-        model: &ShellModel,
+        model: &dyn ClothModel,
         system: &FreeSystem,
         x: &[Vec3],
     ) -> Result<(Self, f64), SolveError> {

@@ -5,7 +5,8 @@ use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL,
 };
-use crate::assembly::{BlockMatrix, ShellModel, Want};
+use crate::assembly::{BlockMatrix, Want};
+use crate::model::ClothModel;
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -20,11 +21,15 @@ enum Mode {
 
 /// Whether `x` is a stable state of `system`: its reduced Hessian is positive definite (one
 /// assembly and one Cholesky attempt; meaningful at an equilibrium).
-pub fn is_stable(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<bool, SolveError> {
+pub fn is_stable(
+    model: &dyn ClothModel,
+    system: &FreeSystem,
+    x: &[Vec3],
+) -> Result<bool, SolveError> {
     let mut x = x.to_vec();
     system.apply_constraints(&mut x);
     let mut grad = vec![[0.0; 3]; model.num_nodes()];
-    let mut hess = BlockMatrix::zeros(model.pattern.clone());
+    let mut hess = BlockMatrix::zeros(model.pattern().clone());
     model
         .assemble(&x, Want::Hessian, Some(&mut grad), Some(&mut hess))
         .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
@@ -48,7 +53,7 @@ pub fn is_stable(model: &ShellModel, system: &FreeSystem, x: &[Vec3]) -> Result<
 /// With [`Strategy::TrustRegion`] the steps are trust-region steps instead (see
 /// [`super::trust`]), the line search and backward Euler kept as the last resort.
 pub fn newton(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     opts: &NewtonOptions,
@@ -60,7 +65,7 @@ pub fn newton(
 /// definite (the stability check factorises it anyway): sensitivities then cost no further
 /// assembly or factorisation.
 pub fn newton_linearized(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     opts: &NewtonOptions,
@@ -73,7 +78,7 @@ pub fn newton_linearized(
 
 /// Newton with the energy line search and the backward-Euler fallback (see [`newton`]).
 pub(super) fn line_search(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     opts: &NewtonOptions,
@@ -82,7 +87,7 @@ pub(super) fn line_search(
     let nn = model.num_nodes();
     let nf = system.num_free;
     let mut grad = vec![[0.0; 3]; nn];
-    let mut hess = BlockMatrix::zeros(model.pattern.clone());
+    let mut hess = BlockMatrix::zeros(model.pattern().clone());
     let mut values = Vec::new();
     let mut report = SolveReport {
         precision: opts.precision,
@@ -383,7 +388,7 @@ fn backward_euler_factor(
 /// [`balance`]; records the energy, the relative residual, the iteration and the assembly time
 /// in `report`.
 pub(super) fn linearize(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &[Vec3],
     it: usize,

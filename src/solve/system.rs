@@ -3,7 +3,8 @@
 //! set and reused by every numeric factorisation.
 
 use super::{refine, SolveError};
-use crate::assembly::{BlockMatrix, ShellModel};
+use crate::assembly::BlockMatrix;
+use crate::model::ClothModel;
 use crate::Vec3;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -41,17 +42,17 @@ pub struct FreeSystem {
 
 impl FreeSystem {
     /// Builds the free-DOF structure for `fixed` (one flag per DOF).
-    pub fn new(model: &ShellModel, fixed: &[bool]) -> Result<Self, SolveError> {
+    pub fn new(model: &dyn ClothModel, fixed: &[bool]) -> Result<Self, SolveError> {
         Self::with_slaves(model, fixed, Vec::new())
     }
 
     /// Builds the free-DOF structure with fixed DOFs and affine constraints.
     pub fn with_slaves(
-        model: &ShellModel,
+        model: &dyn ClothModel,
         fixed: &[bool],
         slaves: Vec<Slave>,
     ) -> Result<Self, SolveError> {
-        let p = &model.pattern;
+        let p = model.pattern();
         let ndof = 3 * p.num_nodes;
         if fixed.len() != ndof {
             return Err(SolveError::Setup(format!(

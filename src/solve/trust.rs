@@ -17,7 +17,8 @@ use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL,
 };
-use crate::assembly::{BlockMatrix, ShellModel};
+use crate::assembly::BlockMatrix;
+use crate::model::ClothModel;
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::MatMut;
@@ -41,7 +42,7 @@ enum Trial {
 /// The trust-region solve (see the module docs); same contract as
 /// [`super::newton_linearized`].
 pub(super) fn trust_region(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     opts: &NewtonOptions,
@@ -49,7 +50,7 @@ pub(super) fn trust_region(
     let t0 = Instant::now();
     let nf = system.num_free;
     let mut grad = vec![[0.0; 3]; model.num_nodes()];
-    let mut hess = BlockMatrix::zeros(model.pattern.clone());
+    let mut hess = BlockMatrix::zeros(model.pattern().clone());
     let mut values = Vec::new();
     let mut report = SolveReport {
         precision: opts.precision,
@@ -147,7 +148,7 @@ pub(super) fn trust_region(
 /// 1e12 · D makes K + λD positive definite.
 #[allow(clippy::too_many_arguments)]
 fn try_step(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     trial: &mut [Vec3],
@@ -264,7 +265,7 @@ fn grow(lambda: f64) -> f64 {
 /// The trust region gave up: the line-search solver with the backward-Euler fallback goes on
 /// from `x`, and the two reports are summed.
 fn hand_over(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut [Vec3],
     opts: &NewtonOptions,
