@@ -32,6 +32,7 @@ pub mod shell;
 pub mod solve;
 pub mod subdiv;
 pub mod synth;
+pub mod tri;
 
 /// A point or vector in 3-space, SI units inside the engine.
 pub type Vec3 = [f64; 3];

@@ -18,15 +18,26 @@ pub struct BlockPattern {
 impl BlockPattern {
     /// Pattern of every pair of nodes within one face's stencils.
     pub fn from_basis(basis: &LimitBasis) -> Self {
-        let n = basis.control_points.len();
-        let mut rows: Vec<Vec<u32>> = vec![Vec::new(); n];
         let npf = basis.points_per_face;
+        let faces: Vec<Vec<u32>> = (0..basis.num_faces)
+            .map(|face| {
+                let mut nodes: Vec<u32> = Vec::new();
+                for q in face * npf..(face + 1) * npf {
+                    nodes.extend_from_slice(basis.stencil(q).0);
+                }
+                nodes
+            })
+            .collect();
+        Self::from_elements(basis.control_points.len(), faces.iter().map(|f| &f[..]))
+    }
+
+    /// Pattern of every pair of nodes within one element (node lists may repeat nodes).
+    pub fn from_elements<'a>(n: usize, elements: impl IntoIterator<Item = &'a [u32]>) -> Self {
+        let mut rows: Vec<Vec<u32>> = vec![Vec::new(); n];
         let mut nodes: Vec<u32> = Vec::new();
-        for face in 0..basis.num_faces {
+        for element in elements {
             nodes.clear();
-            for q in face * npf..(face + 1) * npf {
-                nodes.extend_from_slice(basis.stencil(q).0);
-            }
+            nodes.extend_from_slice(element);
             nodes.sort_unstable();
             nodes.dedup();
             for (a, &i) in nodes.iter().enumerate() {
