@@ -10,8 +10,10 @@ pub mod grid;
 pub mod jet;
 pub mod model;
 pub mod params;
+pub mod scenes;
 
 pub use curve::Stiffness;
 pub use grid::TriGrid;
 pub use model::TriModel;
 pub use params::{TriKind, TriMaterial, ZeroStrain};
+pub use scenes::{TriCantilever, TriTensile};

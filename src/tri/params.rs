@@ -141,18 +141,24 @@ impl TriMaterial {
         } else {
             z.tangent[(2, 2)] / 4.0
         };
-        let [bw, bf, b45] = z.bending;
+        let [bw, bf, _] = z.bending;
+        // a fold across a cell diagonal bends both ways at once: its stiffness is not the
+        // plate's 45° rigidity (that lets the grid fold along its diagonals; a light
+        // cantilever then sags 4.3 times the beam's deflection), and the warp and weft
+        // cantilevers do not determine it; the geometric mean of the two is the assumption
+        let b45 = (bw * bf).sqrt();
         let k = Stiffness::constant;
         let (curves, coupling) = match kind {
             TriKind::Springs => {
                 // diagonal springs k_d on square cells add k_d/4 to each yarn stiffness and
                 // k_d/4 on γ = 2E₁₂; ring-2 springs: ε = −(κa)²/6 along an arc of curvature κ
+                // and the ring-2 springs carry a stretch as the ring-1 ones do
                 let kd = 4.0 * shear;
                 let bend = |b: f64| 36.0 * b / (curvature * curvature * cell.powi(4));
                 (
                     [
-                        k((ew - 0.25 * kd).max(0.1 * ew)),
-                        k((ef - 0.25 * kd).max(0.1 * ef)),
+                        k((ew - 0.25 * kd - bend(bw)).max(0.1 * ew)),
+                        k((ef - 0.25 * kd - bend(bf)).max(0.1 * ef)),
                         k(kd),
                         k(bend(bw)),
                         k(bend(bf)),
