@@ -64,6 +64,9 @@ struct RawMaterial {
     /// written by `ks-fit fit` (how the material was obtained); read past, not used
     #[allow(dead_code)]
     fit: Option<toml::Value>,
+    /// a triangle model's parameters (`crate::tri::file`); read past by the shell
+    #[allow(dead_code)]
+    model: Option<toml::Value>,
 }
 
 #[derive(Deserialize)]
@@ -148,12 +151,12 @@ pub fn load_material(path: &Path) -> Result<FabricMaterial, MaterialFileError> {
 }
 
 /// 1-based line of byte offset `at`.
-fn line_of(text: &str, at: usize) -> usize {
+pub(crate) fn line_of(text: &str, at: usize) -> usize {
     text[..at.min(text.len())].matches('\n').count() + 1
 }
 
 /// Line where `key = …` is written (within `[table]` when given), if it is.
-fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
+pub(crate) fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<usize> {
     let mut current: Option<String> = None;
     for (i, l) in text.lines().enumerate() {
         let l = l.trim_start();
@@ -181,6 +184,15 @@ pub const MODULUS_RANGE: (f64, f64) = (1.0, 1e13);
 
 /// Parses and checks material TOML; `path` names it in errors.
 pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, MaterialFileError> {
+    if let Some(kind) = crate::tri::file::model_only(text) {
+        return Err(MaterialFileError {
+            path: path.to_string(),
+            line: line_of_key(text, Some("model"), "kind"),
+            message: format!(
+                "this file holds a {kind} model ([model] table) and no shell law (a11_pa …); use it with --model {kind}"
+            ),
+        });
+    }
     let raw: RawMaterial = toml::from_str(text).map_err(|e| MaterialFileError {
         path: path.to_string(),
         line: e.span().map(|s| line_of(text, s.start)),

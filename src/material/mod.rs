@@ -8,7 +8,7 @@
 
 pub mod arcsim;
 pub mod bending;
-mod file;
+pub mod file;
 pub mod json;
 mod orthotropic;
 

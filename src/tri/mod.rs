@@ -6,6 +6,7 @@
 //! minimise like the shell's.
 
 pub mod curve;
+pub mod file;
 pub mod grid;
 pub mod jet;
 pub mod model;
