@@ -6,6 +6,7 @@ mod export;
 mod fabric;
 mod guard;
 mod mesh;
+mod models;
 mod scene;
 mod sheets;
 

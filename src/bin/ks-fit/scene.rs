@@ -18,7 +18,7 @@ pub struct SceneArgs {
     /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip; for
     /// a cantilever the automatic choice, see --tol).
     #[arg(long, value_parser = parse_mesh)]
-    mesh: Option<(usize, usize)>,
+    pub mesh: Option<(usize, usize)>,
     /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
     /// ghost for cantilevers, as measured in the README).
     #[arg(long)]
@@ -35,7 +35,7 @@ pub struct SceneArgs {
     tol: f64,
     /// Report each solve on stderr.
     #[arg(short, long)]
-    verbose: bool,
+    pub verbose: bool,
     /// Residual arithmetic of the iterative refinement: f64, dd (double-double) or rug.
     #[arg(long, default_value = "dd")]
     precision: Precision,
@@ -48,10 +48,30 @@ pub struct SceneArgs {
     /// first) or `adaptive` (load steps sized from the predictor's error).
     #[arg(long, default_value = "full-step")]
     strategy: kshell::solve::Strategy,
+    /// Cloth model: kl (the subdivision shell, Clyde et al. 2017), springs, soft-constraints,
+    /// stvk-ds (Miguel et al. 2012) or xpbd (Larionov et al. 2022's energy). A triangle model
+    /// reads the material file's [model] table, or converts the shell law's zero-strain moduli.
+    #[arg(long, default_value = "kl")]
+    pub model: String,
 }
 
 impl SceneArgs {
-    fn solver(&self) -> NewtonOptions {
+    /// The triangle model asked for (`None`: the shell), refusing the shell-only flags with it.
+    pub fn tri_model(&self) -> Result<Option<kshell::tri::TriKind>, String> {
+        if self.model == "kl" {
+            return Ok(None);
+        }
+        let kind = self.model.parse().map_err(|e| format!("--model: {e}"))?;
+        if self.boundary.is_some() || self.grading.is_some() {
+            return Err(format!(
+                "--boundary and --grading apply to the kl model's limit surface, not to --model {}",
+                self.model
+            ));
+        }
+        Ok(Some(kind))
+    }
+
+    pub fn solver(&self) -> NewtonOptions {
         let base = if self.plain_newton {
             NewtonOptions::plain()
         } else {
@@ -130,7 +150,7 @@ pub struct StudyArgs {
 }
 
 /// One line describing a solve, for --verbose.
-fn describe(r: &kshell::solve::SolveReport) -> String {
+pub fn describe(r: &kshell::solve::SolveReport) -> String {
     format!(
         "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {}, {:.1} ms",
         r.iterations,
@@ -157,7 +177,7 @@ const MAX_STEPS: usize = 10_000;
 
 /// A positive number of millimetres up to the top of [`MM_RANGE`], in metres; a strip's
 /// dimensions (not an elongation) are also at least its bottom.
-fn mm(name: &str, v: f64) -> Result<f64, String> {
+pub fn mm(name: &str, v: f64) -> Result<f64, String> {
     let is_elongation = name == "to" || name == "elongation";
     if !(v.is_finite() && v > 0.0 && v <= MM_RANGE.1) {
         return Err(format!(
@@ -192,7 +212,6 @@ pub fn cmd_tensile(
     steps: usize,
     args: &SceneArgs,
 ) -> Result<(), String> {
-    let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l, to) = (mm("width", width)?, mm("length", length)?, mm("to", to)?);
     let angle = angle_deg(angle)?;
     if to > 2.0 * l {
@@ -204,6 +223,11 @@ pub fn cmd_tensile(
     if !(1..=MAX_STEPS).contains(&steps) {
         return Err(format!("--steps must be in [1, {MAX_STEPS}], got {steps}"));
     }
+    let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
+    if let Some(kind) = args.tri_model()? {
+        return crate::models::tensile(kind, material, (w, l, angle), &dl, args);
+    }
+    let mat = load_material(material).map_err(|e| e.to_string())?;
     let mut strip = TensileStrip::new(w, l, angle);
     strip.grading = args.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
     if let Some(m) = args.mesh {
@@ -220,7 +244,6 @@ pub fn cmd_tensile(
         &format!("--mesh {nx}x{ny} with {steps} steps"),
         nx.saturating_mul(ny).saturating_add(kept),
     )?;
-    let dl: Vec<f64> = (1..=steps).map(|i| to * i as f64 / steps as f64).collect();
     let mut rig = strip.rig(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
     let (start, mut shown) = (Instant::now(), 0.0);
@@ -262,7 +285,7 @@ pub fn cmd_tensile(
 
 /// Exit 2 naming the saddles a scene ended on (their rows are printed, but they are not states
 /// the fabric can hold: a small disturbance moves it elsewhere).
-fn unstable_error(what: &str, at: &[String], pattern: &str) -> Result<(), String> {
+pub fn unstable_error(what: &str, at: &[String], pattern: &str) -> Result<(), String> {
     if at.is_empty() {
         return Ok(());
     }
@@ -279,9 +302,12 @@ pub fn cmd_bend(
     width: f64,
     args: &SceneArgs,
 ) -> Result<(), String> {
-    let mat = load_material(material).map_err(|e| e.to_string())?;
     let (w, l) = (mm("width", width)?, mm("overhang", overhang)?);
     let angle = angle_deg(angle)?;
+    if let Some(kind) = args.tri_model()? {
+        return crate::models::bend(kind, material, (w, l, angle), args);
+    }
+    let mat = load_material(material).map_err(|e| e.to_string())?;
     let mut bend = CantileverBend::new(w, l, angle);
     if let Some(m) = args.mesh {
         if m.1 < 2 {
@@ -295,7 +321,14 @@ pub fn cmd_bend(
     bend.solver = args.solver();
     let r = match args.mesh {
         Some(_) => bend.run(&mat).map_err(|e| e.to_string())?,
-        None => auto_bend(&bend, &mat, args)?,
+        None => auto_bend(bend.mesh, args, |mesh| {
+            CantileverBend {
+                mesh,
+                ..bend.clone()
+            }
+            .run(&mat)
+            .map_err(|e| e.to_string())
+        })?,
     };
     if args.verbose {
         eprintln!(
@@ -318,10 +351,10 @@ pub fn cmd_bend(
 /// The cantilever on three meshes (the default, then twice and four times as fine each way),
 /// keeping the coarsest whose Richardson estimate of the drape-angle error is below `--tol`
 /// degrees (the finest, with a warning, where none is or there is no estimate).
-fn auto_bend(
-    bend: &CantileverBend,
-    mat: &kshell::material::FabricMaterial,
+pub fn auto_bend(
+    base: (usize, usize),
     args: &SceneArgs,
+    run: impl Fn((usize, usize)) -> Result<kshell::scene::BendResult, String>,
 ) -> Result<kshell::scene::BendResult, String> {
     if !(args.tol.is_finite() && args.tol > 0.0) {
         return Err(format!(
@@ -329,17 +362,13 @@ fn auto_bend(
             args.tol
         ));
     }
-    let (nx, ny) = bend.mesh;
+    let (nx, ny) = base;
     let mut runs = Vec::new();
     for k in 0..3 {
         let mesh = (nx << k, ny << k);
         kshell::limits::check_mesh(&format!("mesh {}x{}", mesh.0, mesh.1), mesh.0, mesh.1)?;
-        let b = CantileverBend {
-            mesh,
-            ..bend.clone()
-        };
         let t0 = Instant::now();
-        let r = b.run(mat).map_err(|e| e.to_string())?;
+        let r = run(mesh)?;
         if args.verbose {
             eprintln!(
                 "ks-fit: bend: {}x{}: {:.6}° ({:.2} s)",
