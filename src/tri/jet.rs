@@ -63,6 +63,11 @@ impl<const N: usize> Jet<N> {
         self.map(s, 0.5 / s, -0.25 / (s * self.v))
     }
 
+    pub fn recip(&self) -> Self {
+        let r = 1.0 / self.v;
+        self.map(r, -r * r, 2.0 * r * r * r)
+    }
+
     /// atan2(self, x): the angle of (x, self).
     pub fn atan2(&self, x: &Self) -> Self {
         let (y, xv) = (self.v, x.v);

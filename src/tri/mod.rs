@@ -12,6 +12,7 @@ pub mod jet;
 pub mod model;
 pub mod params;
 pub mod scenes;
+pub mod xpbd;
 
 pub use curve::Stiffness;
 pub use grid::TriGrid;

@@ -28,28 +28,28 @@ use std::sync::Arc;
 
 /// A membrane triangle: nodes, rest area and the weights that give w_u, w_v from the nodes.
 #[derive(Clone, Copy, Debug)]
-struct Triangle {
-    nodes: [u32; 3],
-    area: f64,
-    cu: [f64; 3],
-    cv: [f64; 3],
+pub(super) struct Triangle {
+    pub(super) nodes: [u32; 3],
+    pub(super) area: f64,
+    pub(super) cu: [f64; 3],
+    pub(super) cv: [f64; 3],
 }
 
 /// Which stiffness (by component index) an element uses, mixed by the squared direction
 /// cosine with the warp.
 #[derive(Clone, Copy, Debug)]
-struct Mix {
-    warp: usize,
-    weft: usize,
-    c2: f64,
+pub(super) struct Mix {
+    pub(super) warp: usize,
+    pub(super) weft: usize,
+    pub(super) c2: f64,
 }
 
 #[derive(Clone, Copy, Debug)]
-struct HingeEl {
-    nodes: [u32; 4],
-    length: f64,
-    height: f64,
-    mix: Mix,
+pub(super) struct HingeEl {
+    pub(super) nodes: [u32; 4],
+    pub(super) length: f64,
+    pub(super) height: f64,
+    pub(super) mix: Mix,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -66,11 +66,11 @@ pub struct TriModel {
     pub material: TriMaterial,
     /// Warp direction in the rest plane, radians from the x axis.
     pub warp_angle: f64,
-    triangles: Vec<Triangle>,
-    hinges: Vec<HingeEl>,
+    pub(super) triangles: Vec<Triangle>,
+    pub(super) hinges: Vec<HingeEl>,
     springs: Vec<SpringEl>,
-    mass: Vec<f64>,
-    gravity: Vec3,
+    pub(super) mass: Vec<f64>,
+    pub(super) gravity: Vec3,
     pattern: Arc<BlockPattern>,
 }
 
@@ -235,7 +235,9 @@ impl TriModel {
         let e = sub(&p[1], &p[0]);
         let n1 = cross(&e, &sub(&p[2], &p[0]));
         let n2 = cross(&sub(&p[3], &p[0]), &e);
-        let sin = dot(&cross(&n1, &n2), &e).scale(1.0 / h.length);
+        // (n₁ × n₂)·e/|e| with the current |e|: the rest length would scale the angle by the
+        // edge's stretch
+        let sin = dot(&cross(&n1, &n2), &e) * dot(&e, &e).sqrt().recip();
         let theta = sin.atan2(&dot(&n1, &n2));
         let kappa = theta.scale(1.0 / h.height);
         let (w, dw, ddw) = self.density(h.mix, kappa.v);
