@@ -143,9 +143,16 @@ impl<const N: usize> Mul for Jet<N> {
 /// A 3-vector of jets.
 pub type JetVec<const N: usize> = [Jet<N>; 3];
 
-/// The position of local node `node` as jets (variables 3·node … 3·node + 2).
+/// The position of local node `node` as jets (variables 3·node … 3·node + 2; constants when
+/// N = 0, which evaluates an element's energy alone at plain arithmetic's cost).
 pub fn point<const N: usize>(node: usize, x: [f64; 3]) -> JetVec<N> {
-    [0, 1, 2].map(|c| Jet::variable(3 * node + c, x[c]))
+    [0, 1, 2].map(|c| {
+        if N == 0 {
+            Jet::constant(x[c])
+        } else {
+            Jet::variable(3 * node + c, x[c])
+        }
+    })
 }
 
 pub fn sub<const N: usize>(a: &JetVec<N>, b: &JetVec<N>) -> JetVec<N> {

@@ -7,6 +7,7 @@
 
 pub mod curve;
 pub mod file;
+pub mod fit;
 pub mod grid;
 pub mod jet;
 pub mod model;

@@ -197,9 +197,9 @@ impl TriModel {
         )
     }
 
-    fn triangle_energy(&self, t: &Triangle, x: &[Vec3]) -> Jet<9> {
+    fn triangle_energy<const N: usize>(&self, t: &Triangle, x: &[Vec3]) -> Jet<N> {
         let p: Vec<_> = (0..3)
-            .map(|k| point::<9>(k, x[t.nodes[k] as usize]))
+            .map(|k| point::<N>(k, x[t.nodes[k] as usize]))
             .collect();
         let wu = combine(&t.cu, &p);
         let wv = combine(&t.cv, &p);
@@ -228,9 +228,9 @@ impl TriModel {
         energy.scale(t.area)
     }
 
-    fn hinge_energy(&self, h: &HingeEl, x: &[Vec3]) -> Jet<12> {
+    fn hinge_energy<const N: usize>(&self, h: &HingeEl, x: &[Vec3]) -> Jet<N> {
         let p: Vec<_> = (0..4)
-            .map(|k| point::<12>(k, x[h.nodes[k] as usize]))
+            .map(|k| point::<N>(k, x[h.nodes[k] as usize]))
             .collect();
         let e = sub(&p[1], &p[0]);
         let n1 = cross(&e, &sub(&p[2], &p[0]));
@@ -244,9 +244,9 @@ impl TriModel {
         kappa.map(w, dw, ddw).scale(h.length * h.height)
     }
 
-    fn spring_energy(&self, s: &SpringEl, x: &[Vec3]) -> Jet<6> {
+    fn spring_energy<const N: usize>(&self, s: &SpringEl, x: &[Vec3]) -> Jet<N> {
         let p: Vec<_> = (0..2)
-            .map(|k| point::<6>(k, x[s.nodes[k] as usize]))
+            .map(|k| point::<N>(k, x[s.nodes[k] as usize]))
             .collect();
         let d = sub(&p[1], &p[0]);
         let eps = dot(&d, &d).sqrt().scale(1.0 / s.length) + Jet::constant(-1.0);
@@ -315,20 +315,39 @@ impl ClothModel for TriModel {
             h.fill_zero();
         }
         let mut energy = 0.0;
-        for t in &self.triangles {
-            let j = self.triangle_energy(t, x);
-            energy += j.v;
-            scatter(&t.nodes, &j, &mut grad, &mut hess);
-        }
-        for h in &self.hinges {
-            let j = self.hinge_energy(h, x);
-            energy += j.v;
-            scatter(&h.nodes, &j, &mut grad, &mut hess);
-        }
-        for s in &self.springs {
-            let j = self.spring_energy(s, x);
-            energy += j.v;
-            scatter(&s.nodes, &j, &mut grad, &mut hess);
+        if want == Want::Energy {
+            // plain arithmetic: jets over no variables
+            energy += self
+                .triangles
+                .iter()
+                .map(|t| self.triangle_energy::<0>(t, x).v)
+                .sum::<f64>();
+            energy += self
+                .hinges
+                .iter()
+                .map(|h| self.hinge_energy::<0>(h, x).v)
+                .sum::<f64>();
+            energy += self
+                .springs
+                .iter()
+                .map(|s| self.spring_energy::<0>(s, x).v)
+                .sum::<f64>();
+        } else {
+            for t in &self.triangles {
+                let j = self.triangle_energy::<9>(t, x);
+                energy += j.v;
+                scatter(&t.nodes, &j, &mut grad, &mut hess);
+            }
+            for h in &self.hinges {
+                let j = self.hinge_energy::<12>(h, x);
+                energy += j.v;
+                scatter(&h.nodes, &j, &mut grad, &mut hess);
+            }
+            for s in &self.springs {
+                let j = self.spring_energy::<6>(s, x);
+                energy += j.v;
+                scatter(&s.nodes, &j, &mut grad, &mut hess);
+            }
         }
         for (i, p) in x.iter().enumerate() {
             let f = self.mass[i];

@@ -132,7 +132,23 @@ impl TriMaterial {
         cell: f64,
         curvature: f64,
     ) -> Result<Self, String> {
-        let z = ZeroStrain::of(m)?;
+        Ok(Self::from_zero_strain(
+            kind,
+            &ZeroStrain::of(m)?,
+            m.areal_density,
+            cell,
+            curvature,
+        ))
+    }
+
+    /// As [`TriMaterial::equivalent`], from the moduli themselves.
+    pub fn from_zero_strain(
+        kind: TriKind,
+        z: &ZeroStrain,
+        areal_density: f64,
+        cell: f64,
+        curvature: f64,
+    ) -> Self {
         let [ew, ef, e45] = z.uniaxial;
         // uniaxial 45° compliance of diag(k_u, k_v, 4 k_s): ¼/k_u + ¼/k_v + ¼/k_s
         let shear_from_bias = 1.0 / (4.0 / e45 - 1.0 / ew - 1.0 / ef);
@@ -185,11 +201,11 @@ impl TriMaterial {
                 )
             }
         };
-        Ok(Self {
+        Self {
             kind,
             curves,
             coupling,
-            areal_density: m.areal_density,
-        })
+            areal_density,
+        }
     }
 }

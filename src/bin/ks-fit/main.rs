@@ -214,6 +214,13 @@ enum Command {
         /// accurate on the same mesh, at order 2 instead of 1.2.
         #[arg(long, value_parser = parse_grading, default_value = "0.8,0.8")]
         grading: kshell::mesh::Grading,
+        /// Cloth model fitted: kl (the subdivision shell, everything above applies), or a
+        /// triangle model (springs, soft-constraints, stvk-ds, xpbd), fitted in Miguel et al.
+        /// 2012's staged order on 16-faces-wide strips (default output
+        /// <dataset name>-<model>-fit.toml; the options above other than -o and --quiet are the
+        /// shell's).
+        #[arg(long, default_value = "kl")]
+        model: String,
     },
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
@@ -351,6 +358,13 @@ fn main() -> ExitCode {
         Command::Fit {
             file,
             output,
+            quiet,
+            model,
+            ..
+        } if model != "kl" => models::fit(&file, output.as_deref(), &model, quiet, force),
+        Command::Fit {
+            file,
+            output,
             report,
             max_degree,
             degree,
@@ -368,6 +382,7 @@ fn main() -> ExitCode {
             bending,
             mesh_check,
             grading,
+            model: _,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
             degree,

@@ -105,3 +105,107 @@ pub fn bend(
     };
     unstable_error("the cantilever's equilibrium", &saddle, "at overhang {} mm")
 }
+
+/// `ks-fit fit DATA --model M` for a triangle model: writes the `[model]` table and a `[fit]`
+/// table of how well it reproduces every test, prints the per-test table.
+pub fn fit(
+    file: &Path,
+    output: Option<&Path>,
+    model: &str,
+    quiet: bool,
+    force: bool,
+) -> Result<bool, String> {
+    use kshell::tri::fit::{fit_tri, TriFitOptions};
+    use std::fmt::Write;
+    let kind: TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
+    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
+        std::path::PathBuf::from(format!(
+            "{}-{}-fit.toml",
+            data.name
+                .replace(|c: char| !c.is_alphanumeric() && c != '-', "_"),
+            kind.name()
+        ))
+    });
+    let mut guard = crate::guard::Guard::new(force);
+    guard.input(file);
+    guard.file("-o", &out)?;
+    for w in &warnings {
+        eprintln!("ks-fit: {w}");
+    }
+    let mut progress = |line: &str| {
+        if !quiet {
+            eprintln!("ks-fit: fit: {} {line}", kind.name());
+        }
+    };
+    let r = fit_tri(&data, &TriFitOptions::new(kind), &mut progress)?;
+    let mut text = kshell::tri::file::tri_toml(&data.name, &r.material);
+    let _ = writeln!(
+        text,
+        "\n[fit]    # how this material was obtained; read past by ks-fit"
+    );
+    let _ = writeln!(text, "model = {:?}", kind.name());
+    let _ = writeln!(text, "dataset = {:?}", file.display().to_string());
+    let _ = writeln!(text, "seconds = {:.1}", r.seconds);
+    let _ = writeln!(text, "evaluations = {}", r.evaluations);
+    let _ = writeln!(text, "undetermined = {:?}", r.undetermined);
+    let _ = writeln!(text, "notes = {:?}", r.notes);
+    for t in &r.tests {
+        let _ = writeln!(
+            text,
+            "\n[[fit.test]]\nkind = {:?}\nangle_deg = {:?}",
+            t.kind, t.angle_deg
+        );
+        if let Some(c) = &t.curve {
+            let _ = writeln!(text, "curve = {c:?}");
+        }
+        if let Some(e) = t.avg_rel_error {
+            let _ = writeln!(text, "avg_rel_error = {e:.6}");
+        }
+        if let Some((a, g)) = t.drape_angle_deg {
+            let _ = writeln!(text, "drape_angle_deg = {a:.4}\ntarget_drape_deg = {g}");
+        }
+        let _ = writeln!(
+            text,
+            "mesh = \"{}x{}\"\nfitted = {}",
+            t.mesh.0, t.mesh.1, t.fitted
+        );
+    }
+    kshell::io::write_atomic(&out, text)
+        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    for n in &r.notes {
+        println!("note: {n}");
+    }
+    if !r.undetermined.is_empty() {
+        println!(
+            "identifiability: NOT DETERMINED by the data (kept at the start): {}",
+            r.undetermined.join(", ")
+        );
+    }
+    println!(
+        "{:<11} {:>7} {:<16} {:>14} {:>16} {:>8} {:>6}",
+        "kind", "angle", "curve", "avg_rel_error", "drape_angle_deg", "mesh", "fitted"
+    );
+    for t in &r.tests {
+        println!(
+            "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>8} {:>6}",
+            t.kind,
+            t.angle_deg,
+            t.curve.as_deref().unwrap_or("-"),
+            t.avg_rel_error
+                .map_or("-".into(), |e| format!("{:.2} %", 100.0 * e)),
+            t.drape_angle_deg
+                .map_or("-".into(), |(a, g)| format!("{a:.2} ({g:.1})")),
+            format!("{}x{}", t.mesh.0, t.mesh.1),
+            if t.fitted { "yes" } else { "no" }
+        );
+    }
+    println!(
+        "fitted {} in {:.1} s: {} objective evaluations",
+        kind.name(),
+        r.seconds,
+        r.evaluations
+    );
+    println!("wrote {}", out.display());
+    Ok(true)
+}

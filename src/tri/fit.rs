@@ -1,0 +1,514 @@
+//! Fitting a triangle model to a lab dataset, in Miguel et al. 2012's staged order (§5): warp
+//! and weft stretch from the yarn-direction strips, shear from the off-axis strips, warp and
+//! weft bending from the cantilevers, then one more pass over shear and bending; after the
+//! linear pass each membrane component's stiffness k(ε) gains spline control points (2, 3, 5)
+//! while that lowers the stage's residual by at least 1 % (their subdivision rule).
+//!
+//! Each stage is a small damped Gauss–Newton (Levenberg–Marquardt) on the logarithms of its
+//! control values, with forward-difference Jacobians: a stage has one to five parameters and
+//! the triangle models' forward runs are cheap. Residuals are relative: a strip's force error
+//! over the measured force (floored at 2 % of the curve's largest), a cantilever's drape-angle
+//! error over the target angle. Every fitted curve is thinned to at most
+//! [`TriFitOptions::points`] elongations.
+//!
+//! The starting point comes from the data alone: secant moduli of the yarn and 45° strips,
+//! ASTM D1388's bending rigidity B = ρ g c³ of each cantilever, converted as
+//! [`TriMaterial::from_zero_strain`] does. What the data cannot determine is kept at that start
+//! and named in [`TriFit::undetermined`].
+
+use super::curve::Stiffness;
+use super::params::{TriKind, TriMaterial, ZeroStrain};
+use super::scenes::{TriCantilever, TriTensile};
+use crate::assembly::STANDARD_GRAVITY;
+use crate::dataset::{FabricDataset, Role};
+use std::time::Instant;
+
+/// Fit settings.
+#[derive(Clone, Debug)]
+pub struct TriFitOptions {
+    pub kind: TriKind,
+    /// Faces across a strip (along: the same element size).
+    pub strip_faces: usize,
+    /// Cantilever meshes are the default ones times this.
+    pub bend_refine: usize,
+    /// Elongations per fitted curve, at most.
+    pub points: usize,
+    /// Most spline control values per membrane component.
+    pub max_controls: usize,
+}
+
+impl TriFitOptions {
+    pub fn new(kind: TriKind) -> Self {
+        Self {
+            kind,
+            strip_faces: 8,
+            bend_refine: 2,
+            points: 5,
+            max_controls: 5,
+        }
+    }
+}
+
+/// How well the fitted model reproduces one test.
+#[derive(Clone, Debug)]
+pub struct TestFit {
+    pub kind: &'static str,
+    pub angle_deg: f64,
+    pub curve: Option<String>,
+    /// Mean |relative force error| over the curve's points (tensile).
+    pub avg_rel_error: Option<f64>,
+    /// (simulated, target) drape angle, degrees (bend).
+    pub drape_angle_deg: Option<(f64, f64)>,
+    pub mesh: (usize, usize),
+    pub fitted: bool,
+}
+
+/// A fitted triangle model.
+#[derive(Clone, Debug)]
+pub struct TriFit {
+    pub material: TriMaterial,
+    pub tests: Vec<TestFit>,
+    /// Components the data do not determine (kept at the starting value).
+    pub undetermined: Vec<&'static str>,
+    pub notes: Vec<String>,
+    pub evaluations: usize,
+    pub seconds: f64,
+}
+
+/// One residual source: a thinned tensile curve or a cantilever.
+#[derive(Clone, Debug)]
+enum Target {
+    Strip {
+        strip: TriTensile,
+        elongation: Vec<f64>,
+        force: Vec<f64>,
+        floor: f64,
+        curve: String,
+        fitted: bool,
+    },
+    Bend {
+        bend: TriCantilever,
+        angle: f64,
+    },
+}
+
+impl Target {
+    fn angle_deg(&self) -> f64 {
+        match self {
+            Target::Strip { strip, .. } => strip.angle_deg,
+            Target::Bend { bend, .. } => bend.angle_deg,
+        }
+    }
+
+    /// Relative residuals (a failed solve: one large residual per point).
+    fn residuals(&self, m: &TriMaterial) -> Vec<f64> {
+        match self {
+            Target::Strip {
+                strip,
+                elongation,
+                force,
+                floor,
+                ..
+            } => match strip.run(m, elongation) {
+                Ok(p) => p
+                    .iter()
+                    .zip(force)
+                    .map(|(p, f)| (p.force - f) / f.abs().max(*floor))
+                    .collect(),
+                Err(_) => vec![10.0; force.len()],
+            },
+            Target::Bend { bend, angle } => match bend.run(m) {
+                Ok(r) => vec![(r.drape_angle_deg - angle) / angle],
+                Err(_) => vec![10.0],
+            },
+        }
+    }
+}
+
+/// Is `a` (degrees from the weft) along a yarn: 0 weft, 90 warp.
+fn near(a: f64, b: f64) -> bool {
+    let d = (a - b).rem_euclid(180.0);
+    d.min(180.0 - d) < 1e-6
+}
+
+/// ASTM D1388: the bending length c from the overhang l and the drape angle θ,
+/// c = l/2 · (cos(θ/2) / (8 tan θ))^(1/3), and the rigidity B = ρ g c³ (N·m).
+pub fn astm_rigidity(overhang: f64, angle_deg: f64, areal_density: f64) -> f64 {
+    let t = angle_deg.to_radians();
+    let c = 0.5 * overhang * ((0.5 * t).cos() / (8.0 * t.tan())).cbrt();
+    areal_density * STANDARD_GRAVITY * c * c * c
+}
+
+/// Fits `opts.kind` to `data`, saying each stage through `progress`.
+pub fn fit_tri(
+    data: &FabricDataset,
+    opts: &TriFitOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<TriFit, String> {
+    let t0 = Instant::now();
+    let density = data
+        .areal_density
+        .ok_or("the dataset has no areal_density_g_m2: the cantilevers need the weight")?;
+    let mut notes = vec![
+        "no toe (slack, preload) compensation and every repeat fitted alike in triangle-model fits"
+            .to_string(),
+    ];
+    let mut targets = Vec::new();
+    for t in &data.tensile {
+        if opts.kind == TriKind::Springs && !(near(t.angle_deg, 0.0) || near(t.angle_deg, 90.0)) {
+            continue;
+        }
+        let across = opts.strip_faces;
+        let along = ((across as f64 * t.gauge_length / t.width).round() as usize).max(1);
+        let mut strip = TriTensile::new(t.width, t.gauge_length, t.angle_deg);
+        strip.mesh = (across, along);
+        let fmax = t.force.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        let n = t.elongation.len();
+        let take = opts.points.min(n.saturating_sub(1)).max(1);
+        let idx: Vec<usize> = (1..=take).map(|k| (k * (n - 1)).div_ceil(take)).collect();
+        targets.push(Target::Strip {
+            strip,
+            elongation: idx.iter().map(|&i| t.elongation[i]).collect(),
+            force: idx.iter().map(|&i| t.force[i]).collect(),
+            floor: 0.02 * fmax,
+            curve: t.curve.display().to_string(),
+            fitted: t.role != Some(Role::Validation),
+        });
+    }
+    for b in &data.bend {
+        let mut bend = TriCantilever::new(b.width, b.overhang, b.angle_deg);
+        bend.mesh = (
+            bend.mesh.0 * opts.bend_refine,
+            bend.mesh.1 * opts.bend_refine,
+        );
+        targets.push(Target::Bend {
+            bend,
+            angle: b.drape_angle_deg,
+        });
+    }
+    let start = starting_moduli(data, density)?;
+    let cell = data.bend.first().map_or(0.003, |b| {
+        b.width / (TriCantilever::new(b.width, b.overhang, 0.0).mesh.0 * opts.bend_refine) as f64
+    });
+    let mut material = TriMaterial::from_zero_strain(
+        opts.kind,
+        &start.moduli,
+        density,
+        cell,
+        super::file::SPRING_CURVATURE,
+    );
+    material.coupling = 0.0;
+    let mut undetermined = start.undetermined.clone();
+    if opts.kind == TriKind::Springs {
+        undetermined.push("shear");
+        notes.push("the springs model is simulated on yarn-aligned strips only: off-axis strips were not fitted, its shear is the start value".into());
+    }
+    if opts.kind == TriKind::Xpbd {
+        undetermined.push("coupling");
+        notes.push(
+            "xpbd: the Poisson coupling C01 is held at 0 (strip forces hardly depend on it)".into(),
+        );
+    }
+    let mut evaluations = 0;
+    let select = |pred: &dyn Fn(&Target) -> bool| -> Vec<usize> {
+        (0..targets.len()).filter(|&i| pred(&targets[i])).collect()
+    };
+    let is_strip_at =
+        |a: f64| move |t: &Target| matches!(t, Target::Strip { .. }) && near(t.angle_deg(), a);
+    let warp = select(&is_strip_at(90.0));
+    let weft = select(&is_strip_at(0.0));
+    let off: Vec<usize> = select(&|t: &Target| {
+        matches!(t, Target::Strip { fitted: true, .. })
+            && !near(t.angle_deg(), 0.0)
+            && !near(t.angle_deg(), 90.0)
+    });
+    let bend_warp =
+        select(&|t: &Target| matches!(t, Target::Bend { .. }) && near(t.angle_deg(), 90.0));
+    let bend_weft =
+        select(&|t: &Target| matches!(t, Target::Bend { .. }) && near(t.angle_deg(), 0.0));
+    let mut stages: Vec<(&str, usize, &Vec<usize>)> = vec![
+        ("warp stretch", 0, &warp),
+        ("weft stretch", 1, &weft),
+        ("shear", 2, &off),
+        ("warp bending", 3, &bend_warp),
+        ("weft bending", 4, &bend_weft),
+    ];
+    if opts.kind == TriKind::Springs {
+        stages.retain(|s| s.1 != 2);
+    }
+    let mut run =
+        |material: &mut TriMaterial, name: &str, c: usize, set: &[usize], splines: bool| {
+            if set.is_empty() {
+                return;
+            }
+            let cost = stage(material, c, set, &targets, &mut evaluations, opts, splines);
+            progress(&format!(
+                "{name}: {} control value(s), rms error {:.2} % over {} test(s)",
+                material.curves[c].k.len(),
+                100.0 * cost,
+                set.len()
+            ));
+        };
+    for &(name, c, set) in &stages {
+        run(&mut material, name, c, set, c < 3);
+        if c == 4 && opts.kind != TriKind::Springs {
+            tie_diagonal(&mut material);
+        }
+    }
+    // one more pass over shear and bending (the stretch–bend coupling of springs, the
+    // diagonal tie of the others)
+    for &(name, c, set) in stages.iter().filter(|s| s.1 >= 2) {
+        run(&mut material, name, c, set, false);
+        if c == 4 && opts.kind != TriKind::Springs {
+            tie_diagonal(&mut material);
+        }
+    }
+    if opts.kind != TriKind::Springs {
+        undetermined.push("bend_diag");
+        notes.push("bend_diag is the geometric mean of bend_warp and bend_weft: warp and weft cantilevers do not determine it".into());
+    }
+    let tests = report(&targets, &material);
+    Ok(TriFit {
+        material,
+        tests,
+        undetermined,
+        notes,
+        evaluations,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+fn tie_diagonal(m: &mut TriMaterial) {
+    let g = (m.curves[3].k[0] * m.curves[4].k[0]).sqrt();
+    m.curves[5] = Stiffness::constant(g);
+}
+
+/// The starting moduli, and what the data left unknown.
+struct Start {
+    moduli: ZeroStrain,
+    undetermined: Vec<&'static str>,
+}
+
+fn starting_moduli(data: &FabricDataset, density: f64) -> Result<Start, String> {
+    let secant = |angle: f64| -> Option<f64> {
+        let v: Vec<f64> = data
+            .tensile
+            .iter()
+            .filter(|t| near(t.angle_deg, angle) && t.elongation.len() > 1)
+            .filter_map(|t| {
+                let i = t.elongation.len() - 1;
+                let e = t.elongation[i] / t.gauge_length;
+                (e > 0.0).then(|| t.force[i] / (e * t.width))
+            })
+            .filter(|k| k.is_finite() && *k > 0.0)
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let mut undetermined = Vec::new();
+    let ew = secant(90.0).ok_or("no warp (90°) strip to fit the warp stretch")?;
+    let ef = secant(0.0).ok_or("no weft (0°) strip to fit the weft stretch")?;
+    let e45 = secant(45.0).unwrap_or_else(|| {
+        undetermined.push("shear");
+        0.1 * ew.min(ef)
+    });
+    let rigidity = |angle: f64| -> Option<f64> {
+        let v: Vec<f64> = data
+            .bend
+            .iter()
+            .filter(|b| near(b.angle_deg, angle))
+            .map(|b| astm_rigidity(b.overhang, b.drape_angle_deg, density))
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let (bw, bf) = match (rigidity(90.0), rigidity(0.0)) {
+        (Some(w), Some(f)) => (w, f),
+        (Some(w), None) => {
+            undetermined.push("bend_weft");
+            (w, w)
+        }
+        (None, Some(f)) => {
+            undetermined.push("bend_warp");
+            (f, f)
+        }
+        (None, None) => {
+            undetermined.extend(["bend_warp", "bend_weft"]);
+            (1e-5, 1e-5)
+        }
+    };
+    let ks = {
+        let v = 1.0 / (4.0 / e45 - 1.0 / ew - 1.0 / ef);
+        if v > 0.0 && v.is_finite() {
+            v
+        } else {
+            0.05 * ew.min(ef)
+        }
+    };
+    let tangent = nalgebra::Matrix3::new(ew, 0.0, 0.0, 0.0, ef, 0.0, 0.0, 0.0, 4.0 * ks);
+    Ok(Start {
+        moduli: ZeroStrain {
+            uniaxial: [ew, ef, e45],
+            tangent,
+            bending: [bw, bf, (bw * bf).sqrt()],
+        },
+        undetermined,
+    })
+}
+
+/// The rms of the residuals of `set`.
+fn cost(
+    m: &TriMaterial,
+    set: &[usize],
+    targets: &[Target],
+    evaluations: &mut usize,
+) -> (f64, Vec<f64>) {
+    *evaluations += 1;
+    let r: Vec<f64> = set.iter().flat_map(|&i| targets[i].residuals(m)).collect();
+    (
+        (r.iter().map(|v| v * v).sum::<f64>() / r.len().max(1) as f64).sqrt(),
+        r,
+    )
+}
+
+/// Fits component `c` on the targets `set`: linear first, then (when `splines`) with 2, 3
+/// and 5 control values over the strains the set reaches while each lowers the rms by ≥ 1 %.
+/// Returns the final rms.
+fn stage(
+    m: &mut TriMaterial,
+    c: usize,
+    set: &[usize],
+    targets: &[Target],
+    evaluations: &mut usize,
+    opts: &TriFitOptions,
+    splines: bool,
+) -> f64 {
+    let mut best = levenberg_marquardt(m, c, set, targets, evaluations);
+    if !splines {
+        return best;
+    }
+    let reach = set
+        .iter()
+        .filter_map(|&i| match &targets[i] {
+            Target::Strip {
+                strip, elongation, ..
+            } => elongation.last().map(|e| e / strip.length),
+            _ => None,
+        })
+        .fold(0.0f64, f64::max);
+    if reach <= 0.0 {
+        return best;
+    }
+    for n in [2, 3, 5].into_iter().filter(|&n| n <= opts.max_controls) {
+        let old = m.curves[c].clone();
+        let k: Vec<f64> = (0..n)
+            .map(|j| old.at(reach * j as f64 / (n - 1) as f64).0)
+            .collect();
+        m.curves[c] = Stiffness::spline(0.0, reach, k).expect("positive values");
+        let cost = levenberg_marquardt(m, c, set, targets, evaluations);
+        if cost < 0.99 * best {
+            best = cost;
+        } else {
+            m.curves[c] = old;
+            break;
+        }
+    }
+    best
+}
+
+/// Damped Gauss–Newton on log k of component `c`'s control values.
+fn levenberg_marquardt(
+    m: &mut TriMaterial,
+    c: usize,
+    set: &[usize],
+    targets: &[Target],
+    evaluations: &mut usize,
+) -> f64 {
+    let (mut rms, mut r) = cost(m, set, targets, evaluations);
+    let mut lambda = 1e-3;
+    for _ in 0..12 {
+        let n = m.curves[c].k.len();
+        let h: f64 = 1e-4;
+        let mut jac = vec![vec![0.0; r.len()]; n];
+        for (j, col) in jac.iter_mut().enumerate() {
+            let mut t = m.clone();
+            t.curves[c].k[j] *= h.exp();
+            let (_, rt) = cost(&t, set, targets, evaluations);
+            for (a, (x, y)) in rt.iter().zip(&r).enumerate() {
+                col[a] = (x - y) / h;
+            }
+        }
+        let mut improved = false;
+        for _ in 0..6 {
+            let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+            let mut b = nalgebra::DVector::<f64>::zeros(n);
+            for p in 0..n {
+                b[p] = -jac[p].iter().zip(&r).map(|(x, y)| x * y).sum::<f64>();
+                for q in 0..n {
+                    a[(p, q)] = jac[p].iter().zip(&jac[q]).map(|(x, y)| x * y).sum::<f64>();
+                }
+                a[(p, p)] *= 1.0 + lambda;
+                a[(p, p)] += 1e-12;
+            }
+            let Some(step) = a.lu().solve(&b) else { break };
+            let mut t = m.clone();
+            for j in 0..n {
+                t.curves[c].k[j] *= step[j].clamp(-3.0, 3.0).exp();
+            }
+            let (trms, tr) = cost(&t, set, targets, evaluations);
+            if trms < rms {
+                let gain = (rms - trms) / rms;
+                *m = t;
+                (rms, r) = (trms, tr);
+                lambda = (lambda / 4.0).max(1e-9);
+                improved = gain > 1e-4;
+                break;
+            }
+            lambda *= 8.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    rms
+}
+
+/// Every test's error under the fitted material (validation strips included).
+fn report(targets: &[Target], m: &TriMaterial) -> Vec<TestFit> {
+    let mut out = Vec::new();
+    for t in targets {
+        match t {
+            Target::Strip {
+                strip,
+                force,
+                curve,
+                fitted,
+                ..
+            } => {
+                let r = t.residuals(m);
+                out.push(TestFit {
+                    kind: "tensile",
+                    angle_deg: strip.angle_deg,
+                    curve: Some(curve.clone()),
+                    avg_rel_error: Some(
+                        r.iter().map(|v| v.abs()).sum::<f64>() / force.len() as f64,
+                    ),
+                    drape_angle_deg: None,
+                    mesh: strip.mesh,
+                    fitted: *fitted,
+                });
+            }
+            Target::Bend { bend, angle } => {
+                let sim = bend.run(m).map_or(f64::NAN, |r| r.drape_angle_deg);
+                out.push(TestFit {
+                    kind: "bend",
+                    angle_deg: bend.angle_deg,
+                    curve: None,
+                    avg_rel_error: None,
+                    drape_angle_deg: Some((sim, *angle)),
+                    mesh: bend.mesh,
+                    fitted: true,
+                });
+            }
+        }
+    }
+    out
+}
