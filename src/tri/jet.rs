@@ -111,8 +111,15 @@ impl<const N: usize> Add for Jet<N> {
 
 impl<const N: usize> Sub for Jet<N> {
     type Output = Self;
-    fn sub(self, o: Self) -> Self {
-        self + o.scale(-1.0)
+    fn sub(mut self, o: Self) -> Self {
+        self.v -= o.v;
+        for i in 0..N {
+            self.g[i] -= o.g[i];
+            for j in 0..N {
+                self.h[i][j] -= o.h[i][j];
+            }
+        }
+        self
     }
 }
 
@@ -138,6 +145,48 @@ impl<const N: usize> Mul for Jet<N> {
         }
         out
     }
+}
+
+/// The jet over N = 3Q node coordinates of a function whose jet `j` is over M = 3P vectors
+/// v_p = Σ_n a[p][n] x_n (a linear map acting alike on each coordinate): g_n = Σ_p a_pn g_p and
+/// H_nm = Σ_pq a_pn a_qm H_pq, per coordinate pair. Writing an element over the few vectors it
+/// depends on (a triangle's w_u, w_v; a hinge's edge vectors) and pulling back costs far less
+/// than differentiating over every node coordinate.
+pub fn pull_back<const M: usize, const N: usize, const Q: usize>(
+    j: &Jet<M>,
+    a: &[[f64; Q]],
+) -> Jet<N> {
+    let p = a.len();
+    debug_assert!(3 * p == M && 3 * Q == N);
+    let mut out = Jet::<N>::constant(j.v);
+    for n in 0..Q {
+        for c in 0..3 {
+            out.g[3 * n + c] = (0..p).map(|k| a[k][n] * j.g[3 * k + c]).sum();
+        }
+    }
+    // t[3k + c][3n + d] = Σ_q H[3k + c][3q + d] a[q][n]
+    let mut t = vec![[0.0; N]; M];
+    for (row, trow) in j.h.iter().zip(t.iter_mut()) {
+        for n in 0..Q {
+            for d in 0..3 {
+                trow[3 * n + d] = (0..p).map(|q| row[3 * q + d] * a[q][n]).sum();
+            }
+        }
+    }
+    for m in 0..Q {
+        for c in 0..3 {
+            for col in 0..N {
+                out.h[3 * m + c][col] = (0..p).map(|k| a[k][m] * t[3 * k + c][col]).sum();
+            }
+        }
+    }
+    out
+}
+
+/// Vector `k` of an element's reduced variables as jets (variables 3k … 3k + 2), or constants
+/// when M = 0.
+pub fn vector<const M: usize>(k: usize, v: [f64; 3]) -> JetVec<M> {
+    point::<M>(k, v)
 }
 
 /// A 3-vector of jets.

@@ -18,7 +18,7 @@
 //! Gravity acts on the lumped mass ρA/3 per triangle corner.
 
 use super::grid::{EdgeKind, TriGrid};
-use super::jet::{combine, cross, dot, point, sub, Jet};
+use super::jet::{cross, dot, point, pull_back, sub, vector, Jet};
 use super::params::{TriKind, TriMaterial};
 use crate::assembly::{BlockMatrix, BlockPattern, Want};
 use crate::material::OutOfDomain;
@@ -197,12 +197,22 @@ impl TriModel {
         )
     }
 
-    fn triangle_energy<const N: usize>(&self, t: &Triangle, x: &[Vec3]) -> Jet<N> {
-        let p: Vec<_> = (0..3)
-            .map(|k| point::<N>(k, x[t.nodes[k] as usize]))
-            .collect();
-        let wu = combine(&t.cu, &p);
-        let wv = combine(&t.cv, &p);
+    /// The triangle's w_u, w_v (as plain vectors) and the map from its nodes to them.
+    fn triangle_vectors(t: &Triangle, x: &[Vec3]) -> ([Vec3; 2], [[f64; 3]; 2]) {
+        let mut w = [[0.0; 3]; 2];
+        for (k, &n) in t.nodes.iter().enumerate() {
+            for c in 0..3 {
+                w[0][c] += t.cu[k] * x[n as usize][c];
+                w[1][c] += t.cv[k] * x[n as usize][c];
+            }
+        }
+        (w, [t.cu, t.cv])
+    }
+
+    /// The membrane energy as a function of (w_u, w_v) (M = 6) or of nothing (M = 0).
+    fn triangle_energy<const M: usize>(&self, t: &Triangle, w: [Vec3; 2]) -> Jet<M> {
+        let wu = vector::<M>(0, w[0]);
+        let wv = vector::<M>(1, w[1]);
         let uu = dot(&wu, &wu);
         let vv = dot(&wv, &wv);
         let e = match self.material.kind {
@@ -228,13 +238,28 @@ impl TriModel {
         energy.scale(t.area)
     }
 
-    fn hinge_energy<const N: usize>(&self, h: &HingeEl, x: &[Vec3]) -> Jet<N> {
-        let p: Vec<_> = (0..4)
-            .map(|k| point::<N>(k, x[h.nodes[k] as usize]))
-            .collect();
-        let e = sub(&p[1], &p[0]);
-        let n1 = cross(&e, &sub(&p[2], &p[0]));
-        let n2 = cross(&sub(&p[3], &p[0]), &e);
+    /// The hinge's edge e = x₂ − x₁ and a = x₃ − x₁, b = x₄ − x₁ (the angle is translation-free)
+    /// and the map from its nodes to them.
+    fn hinge_vectors(h: &HingeEl, x: &[Vec3]) -> ([Vec3; 3], [[f64; 4]; 3]) {
+        let p = h.nodes.map(|n| x[n as usize]);
+        let d = |k: usize| [0, 1, 2].map(|c| p[k][c] - p[0][c]);
+        (
+            [d(1), d(2), d(3)],
+            [
+                [-1.0, 1.0, 0.0, 0.0],
+                [-1.0, 0.0, 1.0, 0.0],
+                [-1.0, 0.0, 0.0, 1.0],
+            ],
+        )
+    }
+
+    /// The hinge energy as a function of (e, a, b) (M = 9) or of nothing (M = 0).
+    fn hinge_energy<const M: usize>(&self, h: &HingeEl, v: [Vec3; 3]) -> Jet<M> {
+        let e = vector::<M>(0, v[0]);
+        let a = vector::<M>(1, v[1]);
+        let b = vector::<M>(2, v[2]);
+        let n1 = cross(&e, &a);
+        let n2 = cross(&b, &e);
         // (n₁ × n₂)·e/|e| with the current |e|: the rest length would scale the angle by the
         // edge's stretch
         let sin = dot(&cross(&n1, &n2), &e) * dot(&e, &e).sqrt().recip();
@@ -317,16 +342,14 @@ impl ClothModel for TriModel {
         let mut energy = 0.0;
         if want == Want::Energy {
             // plain arithmetic: jets over no variables
-            energy += self
-                .triangles
-                .iter()
-                .map(|t| self.triangle_energy::<0>(t, x).v)
-                .sum::<f64>();
-            energy += self
-                .hinges
-                .iter()
-                .map(|h| self.hinge_energy::<0>(h, x).v)
-                .sum::<f64>();
+            for t in &self.triangles {
+                energy += self
+                    .triangle_energy::<0>(t, Self::triangle_vectors(t, x).0)
+                    .v;
+            }
+            for h in &self.hinges {
+                energy += self.hinge_energy::<0>(h, Self::hinge_vectors(h, x).0).v;
+            }
             energy += self
                 .springs
                 .iter()
@@ -334,12 +357,14 @@ impl ClothModel for TriModel {
                 .sum::<f64>();
         } else {
             for t in &self.triangles {
-                let j = self.triangle_energy::<9>(t, x);
+                let (w, map) = Self::triangle_vectors(t, x);
+                let j: Jet<9> = pull_back(&self.triangle_energy::<6>(t, w), &map);
                 energy += j.v;
                 scatter(&t.nodes, &j, &mut grad, &mut hess);
             }
             for h in &self.hinges {
-                let j = self.hinge_energy::<12>(h, x);
+                let (v, map) = Self::hinge_vectors(h, x);
+                let j: Jet<12> = pull_back(&self.hinge_energy::<9>(h, v), &map);
                 energy += j.v;
                 scatter(&h.nodes, &j, &mut grad, &mut hess);
             }
