@@ -1,0 +1,188 @@
+//! `--model` on the lab commands, driven through the binary: the triangle models print the
+//! shell's CSV, read and refuse material files clearly, and refuse what they cannot simulate.
+
+mod common;
+
+use common::{folder, ks_fit};
+
+const COTTON: &str = "examples/materials/cotton.toml";
+
+/// A 50 × 75 mm warp strip of stvk-ds converted from the example cotton: the aligned strip's
+/// strain is uniform and the diagonal model has no Poisson coupling, so its force at
+/// elongation δ is the closed form k (ε + ε²/2)(1 + ε) W with ε = δ/L and k the shell's
+/// uniaxial warp modulus (a₁₁ − a₁₂²/a₂₂) τ = (2e8 − 6e7²/1.2e8) · 1.8e-4 N/m.
+#[test]
+fn tensile_with_a_triangle_model_prints_the_shells_csv_and_the_closed_form() {
+    let (rc, out, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        COTTON,
+        "--angle",
+        "90",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "1.5",
+        "--steps",
+        "2",
+        "--model",
+        "stvk-ds",
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    assert!(err.contains("converted from the shell law"), "{err}");
+    let rows: Vec<&str> = out.lines().collect();
+    assert_eq!(rows[0], "elongation_mm,force_n");
+    let k = (2e8 - 6e7 * 6e7 / 1.2e8) * 1.8e-4;
+    for (row, dl) in rows[1..].iter().zip([0.75e-3, 1.5e-3]) {
+        let f: f64 = row.split(',').nth(1).unwrap().parse().unwrap();
+        let e: f64 = dl / 0.075;
+        let exact = k * (e + 0.5 * e * e) * (1.0 + e) * 0.05;
+        assert!((f - exact).abs() < 1e-9 * exact, "{f} vs {exact}");
+    }
+}
+
+#[test]
+fn bend_with_every_triangle_model_gives_an_angle() {
+    for model in ["soft-constraints", "stvk-ds", "xpbd"] {
+        let (rc, out, err) = ks_fit(&[
+            "bend",
+            "--material",
+            COTTON,
+            "--angle",
+            "90",
+            "--overhang",
+            "47.7",
+            "--mesh",
+            "4x8",
+            "--model",
+            model,
+        ]);
+        assert_eq!(rc, 0, "{model}: {err}");
+        let angle: f64 = out
+            .lines()
+            .nth(1)
+            .unwrap()
+            .split(',')
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(angle > 5.0 && angle < 30.0, "{model}: {out}");
+    }
+}
+
+#[test]
+fn what_a_model_cannot_do_is_refused_clearly() {
+    let (rc, _, err) = ks_fit(&[
+        "tensile",
+        "--material",
+        COTTON,
+        "--angle",
+        "45",
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "1",
+        "--steps",
+        "1",
+        "--model",
+        "springs",
+    ]);
+    assert_eq!(rc, 2, "{err}");
+    assert!(
+        err.contains("springs model needs its grid along the yarns"),
+        "{err}"
+    );
+    let (rc, _, err) = ks_fit(&[
+        "bend",
+        "--material",
+        COTTON,
+        "--angle",
+        "90",
+        "--overhang",
+        "40",
+        "--model",
+        "xpbd",
+        "--boundary",
+        "ghost",
+    ]);
+    assert_eq!(rc, 2, "{err}");
+    assert!(
+        err.contains("--boundary and --grading apply to the kl model"),
+        "{err}"
+    );
+    let (rc, _, err) = ks_fit(&[
+        "bend",
+        "--material",
+        COTTON,
+        "--angle",
+        "90",
+        "--overhang",
+        "40",
+        "--model",
+        "cloth",
+    ]);
+    assert_eq!(rc, 2, "{err}");
+    assert!(err.contains("unknown model 'cloth'"), "{err}");
+}
+
+/// A file with only a `[model]` table serves its model and is pointed to `--model` by the
+/// shell's commands; a table of another kind is refused naming the right flag.
+#[test]
+fn model_tables_are_read_and_misuse_is_explained() {
+    let dir = folder("model-table");
+    let path = dir.join("m.toml");
+    std::fs::write(
+        &path,
+        "name = \"t\"\nareal_density_g_m2 = 100.0\n[model]\nkind = \"soft-constraints\"\n\
+         stretch_warp_n_per_m = [30000.0]\nstretch_weft_n_per_m = [18000.0]\nshear_n_per_m = [300.0]\n\
+         bend_warp_n_m = [2.0e-5]\nbend_weft_n_m = [1.0e-5]\nbend_diag_n_m = [1.4e-5]\n",
+    )
+    .unwrap();
+    let p = path.to_str().unwrap();
+    let args = |model: &'static str| {
+        vec![
+            "tensile",
+            "--material",
+            p,
+            "--angle",
+            "90",
+            "--width",
+            "50",
+            "--length",
+            "75",
+            "--to",
+            "1.5",
+            "--steps",
+            "1",
+            "--model",
+            model,
+        ]
+    };
+    let (rc, out, err) = ks_fit(&args("soft-constraints"));
+    assert_eq!(rc, 0, "{err}");
+    // Baraff–Witkin strain is the stretch: F = k ε W exactly
+    let f: f64 = out
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((f - 30000.0 * 0.02 * 0.05).abs() < 1e-9, "{out}");
+    let (rc, _, err) = ks_fit(&args("kl"));
+    assert_eq!(rc, 2);
+    assert!(
+        err.contains("use it with --model soft-constraints"),
+        "{err}"
+    );
+    let (rc, _, err) = ks_fit(&args("stvk-ds"));
+    assert_eq!(rc, 2);
+    assert!(err.contains("run with --model soft-constraints"), "{err}");
+}
