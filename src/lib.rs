@@ -11,6 +11,7 @@
 //! | [`dataset`] | the fabric dataset: `fabric.toml` and its CSV curves, read, checked, written |
 //! | [`synth`] | synthetic datasets from a material through the virtual lab |
 //! | [`io`] | safe output (temporary file and rename) and plain number printing |
+//! | [`render`] | pictures: the limit surface tessellated by a GPU kernel (`shaders/`), shaded with its yarn lines, PNG |
 //! | [`limits`] | resource limits checked before allocating (faces of a mesh) |
 //!
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
@@ -27,6 +28,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod quadrature;
+pub mod render;
 pub mod scene;
 pub mod shell;
 pub mod solve;

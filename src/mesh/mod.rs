@@ -14,7 +14,7 @@ mod obj;
 pub mod shapes;
 
 pub use grid::{graded_grid, rectangular_grid, Grading};
-pub use obj::{parse_obj, read_obj, write_obj, ObjMesh};
+pub use obj::{parse_obj, read_obj, write_obj, ObjError, ObjMesh, MAX_OBJ_BYTES};
 
 use crate::Vec3;
 use std::collections::HashMap;
