@@ -71,23 +71,32 @@ impl Camera {
         });
         let aspect = width as f64 / height as f64;
         let half_y = 0.5 * FOV_Y_DEG.to_radians();
-        let half = half_y.min((half_y.tan() * aspect).atan());
-        let dist = 1.05 * r / half.sin();
-        let eye = [
-            c[0] + dist * dir[0],
-            c[1] + dist * dir[1],
-            c[2] + dist * dir[2],
-        ];
-        let f = unit(sub(c, eye));
+        let (ty, tx) = (half_y.tan(), half_y.tan() * aspect);
+        // the nearest distance along `dir` at which every corner of the box is in the picture,
+        // with a 6 % margin
+        let f = [-dir[0], -dir[1], -dir[2]];
         let s = unit(cross(f, [0.0, 0.0, 1.0]));
         let u = cross(s, f);
+        let mut dist: f64 = 1e-9;
+        for k in 0..8 {
+            let p = [
+                if k & 1 == 0 { lo[0] } else { hi[0] } - c[0],
+                if k & 2 == 0 { lo[1] } else { hi[1] } - c[1],
+                if k & 4 == 0 { lo[2] } else { hi[2] } - c[2],
+            ];
+            let depth = dot(f, p);
+            dist = dist
+                .max(depth + 1.06 * dot(s, p).abs() / tx)
+                .max(depth + 1.06 * dot(u, p).abs() / ty);
+        }
+        let eye = [c[0] + dist * dir[0], c[1] + dist * dir[1], c[2] + dist * dir[2]];
         let view_m = [
             [s[0], s[1], s[2], -dot(s, eye)],
             [u[0], u[1], u[2], -dot(u, eye)],
             [-f[0], -f[1], -f[2], dot(f, eye)],
             [0.0, 0.0, 0.0, 1.0],
         ];
-        let (near, far) = ((dist - 3.0 * r).max(0.01 * dist), dist + 3.0 * r);
+        let (near, far) = ((dist - 3.0 * r).max(0.01 * dist), dist + 8.0 * r);
         let fy = 1.0 / half_y.tan();
         let proj = [
             [fy / aspect, 0.0, 0.0, 0.0],

@@ -454,7 +454,7 @@ impl Renderer {
             .unwrap_or_else(|| auto_line_spacing(d.uv_extent.max(1e-9)));
         let light = unit(LIGHT);
         let (cx, cy) = (0.5 * (d.lo[0] + d.hi[0]), 0.5 * (d.lo[1] + d.hi[1]));
-        let reach = 0.9 * size;
+        let reach = 2.5 * size;
         let frame = Frame {
             view_proj: cam.columns_f32(),
             eye: [cam.eye[0] as f32, cam.eye[1] as f32, cam.eye[2] as f32, 1.0],

@@ -7,6 +7,7 @@ mod fabric;
 mod guard;
 mod mesh;
 mod models;
+mod render;
 mod scene;
 mod sheets;
 
@@ -108,6 +109,18 @@ enum Command {
     Scene {
         #[command(subcommand)]
         scene: sheets::ShowScene,
+    },
+    /// Render a shape (OBJ, e.g. a scene's shape.obj) to PNG on the GPU (a software Vulkan
+    /// driver such as Mesa's lavapipe will do): the cloth with its warp (red) and weft (blue)
+    /// lines where the file has texture coordinates in metres of fabric, lit from above.
+    Render {
+        /// Wavefront OBJ shape.
+        file: PathBuf,
+        /// PNG file to write.
+        #[arg(long)]
+        out: PathBuf,
+        #[command(flatten)]
+        image: render::ImageArgs,
     },
     /// Write a material in another simulator's format: `arcsim` (the JSON material of Wang et
     /// al. 2011 that ARCSim reads; warp on u, weft on v). Prints how closely the format
@@ -310,6 +323,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let force = cli.force;
     kshell::limits::set_max_faces(cli.max_faces);
+    let draws = matches!(
+        cli.command,
+        Command::Render { .. } | Command::Scene { .. } | Command::Fit { .. }
+    );
+    if draws {
+        render::quiet_driver_warnings();
+    }
     let result = match cli.command {
         Command::Mesh {
             file,
@@ -350,6 +370,9 @@ fn main() -> ExitCode {
             out,
             max_strain,
         } => export::cmd_export(&material, format, &out, max_strain, force).map(|()| true),
+        Command::Render { file, out, image } => {
+            render::cmd_render(&file, &out, &image, force).map(|()| true)
+        }
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check {
             file,
@@ -441,6 +464,9 @@ fn main() -> ExitCode {
         )
         .map(|()| true),
     };
+    if draws {
+        render::cleanup_driver_folder();
+    }
     match result {
         Ok(true) => ExitCode::SUCCESS,
         // the fit ran but missed --max-error on a fitted test (the verdict line says which)

@@ -44,6 +44,11 @@ pub struct ShowArgs {
     /// is reported anyway).
     #[arg(short, long)]
     verbose: bool,
+    /// No scene.png (it is drawn on the GPU; without one the scene says so and goes on).
+    #[arg(long)]
+    no_image: bool,
+    #[command(flatten)]
+    image: crate::render::ImageArgs,
 }
 
 #[derive(Subcommand)]
@@ -428,5 +433,50 @@ fn write_outputs(
         let p = out.join(&name);
         kshell::io::write_atomic(&p, text).map_err(|e| format!("writing {}: {e}", p.display()))?;
     }
+    if !scene.args().no_image {
+        let p = out.join("scene.png");
+        match picture(d, m, &scene.args().image) {
+            Ok((png, what)) => {
+                kshell::io::write_atomic(&p, png)
+                    .map_err(|e| format!("writing {}: {e}", p.display()))?;
+                eprintln!("ks-fit: scene: {what}");
+            }
+            Err(e) => eprintln!("ks-fit: scene: no scene.png ({e}); the shapes are written"),
+        }
+    }
     Ok(())
+}
+
+/// Samples per cage face and side of the picture's tessellation: about 128 across the sheet.
+fn samples_per_face(mesh: usize) -> usize {
+    (128 / mesh.max(1)).clamp(2, 16)
+}
+
+/// The deformed limit surface drawn on the GPU (tessellated there by the stencil kernel).
+fn picture(
+    d: &Deformed,
+    mesh: usize,
+    args: &crate::render::ImageArgs,
+) -> Result<(Vec<u8>, String), String> {
+    use kshell::render::{Renderer, Tessellation};
+    let t0 = Instant::now();
+    let renderer = Renderer::new().map_err(|e| e.to_string())?;
+    let k = samples_per_face(mesh);
+    let tess = Tessellation::new(d.sheet.model.basis.surface(), d.sheet.rest(), k)
+        .map_err(|e| e.to_string())?;
+    let image = renderer
+        .render_limit(&tess, &d.x, &args.options())
+        .map_err(|e| e.to_string())?;
+    let png = image.png().map_err(|e| e.to_string())?;
+    Ok((
+        png,
+        format!(
+            "scene.png {}x{}: {} limit samples ({k}x{k} per face) on {} in {:.2} s",
+            image.width,
+            image.height,
+            tess.num_points(),
+            renderer.adapter_name(),
+            t0.elapsed().as_secs_f64()
+        ),
+    ))
 }
