@@ -164,6 +164,48 @@ fn noise_free_degree2_data_are_fitted_back() {
         csv.starts_with("elongation_mm,measured_n,fitted_n,rel_error\n"),
         "{csv}"
     );
+    check_report_page(&report.join("index.html"), tests.len(), 5);
+}
+
+/// The report's index.html parses (it is written as polyglot markup, so an XML parser is a
+/// strict check), references nothing outside itself, has one row per test in its error table
+/// and one inline plot per cut angle.
+fn check_report_page(path: &std::path::Path, tests: usize, angles: usize) {
+    let text = std::fs::read_to_string(path).expect("index.html");
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&text, opts)
+        .unwrap_or_else(|e| panic!("index.html does not parse: {e}"));
+    let root = doc.root_element();
+    assert_eq!(root.tag_name().name(), "html");
+    for n in doc.descendants().filter(|n| n.is_element()) {
+        let name = n.tag_name().name();
+        assert!(
+            !["script", "link", "iframe", "object", "embed"].contains(&name),
+            "external or active content: <{name}>"
+        );
+        if let Some(src) = n.attribute("src") {
+            assert!(src.starts_with("data:image/png;base64,"), "<{name} src={src:.40}>");
+        }
+        if let Some(href) = n.attribute("href") {
+            assert!(href.starts_with('#'), "<{name} href={href}>");
+        }
+    }
+    let error_table = doc
+        .descendants()
+        .find(|n| n.has_tag_name("h2") && n.text() == Some("Errors per test"))
+        .and_then(|h| h.next_siblings().find(|n| n.has_tag_name("table")))
+        .expect("the error table");
+    let rows = error_table.children().filter(|n| n.has_tag_name("tr")).count();
+    assert_eq!(rows, tests + 1, "one row per test and a header");
+    let plots = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("figure"))
+        .filter(|f| f.children().any(|c| c.tag_name().name() == "svg"))
+        .count();
+    assert_eq!(plots, angles, "one inline plot per cut angle");
 }
 
 /// Bending of its own (issue: "a material you can trust", item 3): a fabric twice as stiff in

@@ -91,10 +91,15 @@ fn without_a_driver_the_scene_says_so_and_still_writes_the_shapes() {
     );
     // `render` has nothing else to do: an error, exit code 2
     let shape = out.join("shape.obj");
-    let (rc, _, err) =
-        ks_fit_env(&["render", s(&shape), "--out", s(&dir.join("x.png"))], &NO_DRIVERS);
+    let (rc, _, err) = ks_fit_env(
+        &["render", s(&shape), "--out", s(&dir.join("x.png"))],
+        &NO_DRIVERS,
+    );
     assert_eq!(rc, 2);
-    assert!(err.starts_with("ks-fit: error: no GPU adapter found"), "{err}");
+    assert!(
+        err.starts_with("ks-fit: error: no GPU adapter found"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -114,6 +119,9 @@ fn bad_render_input_is_a_one_line_error() {
     );
     let (rc, _, err) = ks_fit(&["render", s(&obj), "--out", s(&png), "--image", "0x10"]);
     assert_eq!(rc, 2);
-    assert!(err.contains("each side must be a whole number from 1 to 8192"), "{err}");
+    assert!(
+        err.contains("each side must be a whole number from 1 to 8192"),
+        "{err}"
+    );
     assert!(!png.exists());
 }

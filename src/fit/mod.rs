@@ -44,6 +44,7 @@ mod mesh_check;
 pub mod optim;
 pub mod plausible;
 pub mod preprocess;
+pub mod html;
 pub mod report;
 mod rigs;
 mod stages;

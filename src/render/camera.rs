@@ -89,7 +89,11 @@ impl Camera {
                 .max(depth + 1.06 * dot(s, p).abs() / tx)
                 .max(depth + 1.06 * dot(u, p).abs() / ty);
         }
-        let eye = [c[0] + dist * dir[0], c[1] + dist * dir[1], c[2] + dist * dir[2]];
+        let eye = [
+            c[0] + dist * dir[0],
+            c[1] + dist * dir[1],
+            c[2] + dist * dir[2],
+        ];
         let view_m = [
             [s[0], s[1], s[2], -dot(s, eye)],
             [u[0], u[1], u[2], -dot(u, eye)],

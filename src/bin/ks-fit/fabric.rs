@@ -74,10 +74,17 @@ fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
 
 /// Runs `ks-fit fit`; `Ok(false)` when the fit missed `--max-error` on a fitted test (the
 /// material and report are written all the same).
+/// Where `--report` goes and whether it draws the scenes.
+pub struct ReportArgs<'a> {
+    pub dir: &'a Path,
+    /// Also solve and draw the three showcase scenes on the fitted material (`--scenes`).
+    pub scenes: Option<&'a crate::render::ImageArgs>,
+}
+
 pub fn cmd_fit(
     file: &Path,
     output: Option<&Path>,
-    report: Option<&Path>,
+    report: Option<ReportArgs>,
     opts: &kshell::fit::FitOptions,
     quiet: bool,
     allow_outside: bool,
@@ -94,8 +101,8 @@ pub fn cmd_fit(
         guard.input(&dir.join(&t.curve));
     }
     guard.file("-o", &out)?;
-    if let Some(r) = report {
-        guard.folder("--report", r, "summary.txt")?;
+    if let Some(r) = &report {
+        guard.folder("--report", r.dir, "summary.txt")?;
     }
     for w in &warnings {
         eprintln!("ks-fit: {w}");
@@ -109,10 +116,23 @@ pub fn cmd_fit(
     let text = fit_report::fit_toml(&result, &file.display().to_string());
     kshell::io::write_atomic(&out, text)
         .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
-    if let Some(dir) = report {
-        progress("writing the report (CSV and SVG of every test)");
-        let files = fit_report::write_report(&result, dir)
+    if let Some(r) = &report {
+        let dir = r.dir;
+        progress("writing the report (CSV and SVG of every test, index.html)");
+        let mut files = fit_report::write_report(&result, dir)
             .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
+        let (figures, notes) = match r.scenes {
+            Some(args) => crate::sheets::report_figures(&result.material, args, &mut progress),
+            None => (Vec::new(), Vec::new()),
+        };
+        for n in &notes {
+            eprintln!("ks-fit: fit: {n}");
+        }
+        let page = kshell::fit::html::fit_html(&result, &file.display().to_string(), &figures);
+        let index = dir.join("index.html");
+        kshell::io::write_atomic(&index, page)
+            .map_err(|e| format!("cannot write {}: {e}", index.display()))?;
+        files.push(index.display().to_string());
         progress(&format!(
             "report: {} files in {}",
             files.len(),

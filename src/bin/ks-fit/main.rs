@@ -150,9 +150,18 @@ enum Command {
         /// Fitted material file (default: <dataset name>-fit.toml in the current folder).
         #[arg(short = 'o', long = "output")]
         output: Option<PathBuf>,
-        /// Also write per-test CSVs of measured and fitted force, SVG plots and a summary here.
+        /// Also write per-test CSVs of measured and fitted force, SVG plots, a summary and
+        /// index.html (one self-contained page: material, uncertainties, every curve against the
+        /// fit, errors, degrees, meshes, timings) here.
         #[arg(long)]
         report: Option<PathBuf>,
+        /// With --report: also solve the drape, picture frame and corner pull on the fitted
+        /// material (fixed meshes 16x16, 16x16, 20x20; about a minute or two) and put their
+        /// GPU renders in index.html.
+        #[arg(long, requires = "report")]
+        scenes: bool,
+        #[command(flatten)]
+        image: render::ImageArgs,
         /// Highest polynomial degree of each η tried (lowest first).
         #[arg(long, default_value_t = 3)]
         max_degree: usize,
@@ -389,6 +398,8 @@ fn main() -> ExitCode {
             file,
             output,
             report,
+            scenes,
+            image,
             max_degree,
             degree,
             mesh_ladder,
@@ -429,7 +440,10 @@ fn main() -> ExitCode {
             cmd_fit(
                 &file,
                 output.as_deref(),
-                report.as_deref(),
+                report.as_deref().map(|dir| fabric::ReportArgs {
+                    dir,
+                    scenes: scenes.then_some(&image),
+                }),
                 &opts,
                 quiet,
                 allow_outside,

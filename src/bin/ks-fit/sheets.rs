@@ -167,73 +167,98 @@ impl ShowScene {
 
     fn run(&self, material: &FabricMaterial, mesh: usize) -> Result<Run, SceneError> {
         let a = self.args();
-        // wrinkling and folding sheets spend long stretches in backward-Euler relaxation: a
-        // budget of 60 iterations per solve failed a 10 % corner pull on 20 × 20
-        let solver = NewtonOptions {
-            max_iterations: SCENE_ITERATIONS,
-            ..NewtonOptions::default()
+        let kind = match self {
+            ShowScene::Drape { .. } => Kind::Drape,
+            ShowScene::PictureFrame { shear_deg, .. } => Kind::Frame(*shear_deg),
+            ShowScene::CornerPull { stretch, .. } => Kind::Corner(*stretch),
         };
-        let t0 = Instant::now();
-        let (qoi, csv, deformed) = match self {
-            ShowScene::Drape { .. } => {
-                let drape = Drape {
-                    mesh,
-                    steps: a.steps,
-                    seed: a.seed,
-                    solver,
-                    ..Drape::new()
-                };
-                let (s, d) = drape.run(material)?;
-                let csv = format!(
-                    "drop_mm,depth_mm,width_mm\n{:.4},{:.4},{:.4}\n",
-                    s.drop * 1e3,
-                    s.depth * 1e3,
-                    s.width * 1e3
-                );
-                (s.depth * 1e3, csv, d)
-            }
-            ShowScene::PictureFrame { shear_deg, .. } => {
-                let frame = PictureFrame {
-                    mesh,
-                    steps: a.steps,
-                    seed: a.seed,
-                    solver,
-                    ..PictureFrame::new(0.1, *shear_deg)
-                };
-                let (points, d) = frame.run(material)?;
-                let mut csv = String::from("shear_angle_deg,shear_force_n,axial_force_n\n");
-                for p in &points {
-                    let _ = writeln!(
-                        csv,
-                        "{:.4},{:.6e},{:.6e}",
-                        p.shear_deg, p.shear_force, p.axial_force
-                    );
-                }
-                (points.last().map_or(0.0, |p| p.shear_force), csv, d)
-            }
-            ShowScene::CornerPull { stretch, .. } => {
-                let pull = CornerPull {
-                    mesh,
-                    steps: a.steps,
-                    seed: a.seed,
-                    solver,
-                    ..CornerPull::new(0.1, stretch / 100.0)
-                };
-                let (points, d) = pull.run(material)?;
-                let mut csv = String::from("displacement_mm,force_n\n");
-                for p in &points {
-                    let _ = writeln!(csv, "{:.4},{:.6e}", p.displacement * 1e3, p.force);
-                }
-                (points.last().map_or(0.0, |p| p.force), csv, d)
-            }
-        };
-        Ok(Run {
-            qoi,
-            csv,
-            deformed,
-            seconds: t0.elapsed().as_secs_f64(),
-        })
+        run_kind(kind, material, mesh, a.steps, a.seed)
     }
+}
+
+/// A showcase scene with its own parameter: the frame's final shear (degrees), the corner
+/// pull's final stretch (percent).
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Drape,
+    Frame(f64),
+    Corner(f64),
+}
+
+/// Solves one scene on one mesh.
+fn run_kind(
+    kind: Kind,
+    material: &FabricMaterial,
+    mesh: usize,
+    steps: usize,
+    seed: u64,
+) -> Result<Run, SceneError> {
+    // wrinkling and folding sheets spend long stretches in backward-Euler relaxation: a
+    // budget of 60 iterations per solve failed a 10 % corner pull on 20 × 20
+    let solver = NewtonOptions {
+        max_iterations: SCENE_ITERATIONS,
+        ..NewtonOptions::default()
+    };
+    let t0 = Instant::now();
+        let (qoi, csv, deformed) = match kind {
+        Kind::Drape => {
+            let drape = Drape {
+                mesh,
+                steps,
+                seed,
+                solver,
+                ..Drape::new()
+            };
+            let (s, d) = drape.run(material)?;
+            let csv = format!(
+                "drop_mm,depth_mm,width_mm\n{:.4},{:.4},{:.4}\n",
+                s.drop * 1e3,
+                s.depth * 1e3,
+                s.width * 1e3
+            );
+            (s.depth * 1e3, csv, d)
+        }
+        Kind::Frame(shear_deg) => {
+            let frame = PictureFrame {
+                mesh,
+                steps,
+                seed,
+                solver,
+                ..PictureFrame::new(0.1, shear_deg)
+            };
+            let (points, d) = frame.run(material)?;
+            let mut csv = String::from("shear_angle_deg,shear_force_n,axial_force_n\n");
+            for p in &points {
+                let _ = writeln!(
+                    csv,
+                    "{:.4},{:.6e},{:.6e}",
+                    p.shear_deg, p.shear_force, p.axial_force
+                );
+            }
+            (points.last().map_or(0.0, |p| p.shear_force), csv, d)
+        }
+        Kind::Corner(stretch) => {
+            let pull = CornerPull {
+                mesh,
+                steps,
+                seed,
+                solver,
+                ..CornerPull::new(0.1, stretch / 100.0)
+            };
+            let (points, d) = pull.run(material)?;
+            let mut csv = String::from("displacement_mm,force_n\n");
+            for p in &points {
+                let _ = writeln!(csv, "{:.4},{:.6e}", p.displacement * 1e3, p.force);
+            }
+            (points.last().map_or(0.0, |p| p.force), csv, d)
+        }
+    };
+    Ok(Run {
+        qoi,
+        csv,
+        deformed,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 /// How the mesh was chosen, for the report.
@@ -479,4 +504,58 @@ fn picture(
             t0.elapsed().as_secs_f64()
         ),
     ))
+}
+
+/// Meshes of the report's scene pictures: fixed, so that a report costs a predictable time (the
+/// corner pull's clips sit on cage lines at multiples of 10).
+const REPORT_MESHES: [(Kind, usize, &str); 3] = [
+    (Kind::Drape, 16, "drape: a 1 m sheet held by two corners brought 60 cm apart"),
+    (Kind::Frame(40.0), 16, "picture frame: a 10 cm square sheared 40°"),
+    (Kind::Corner(10.0), 20, "corner pull: a 10 cm square stretched 10 % along a diagonal"),
+];
+
+/// The three showcase scenes on `material`, drawn for a fit's report (8 steps, seed 0, the
+/// meshes of `REPORT_MESHES`). A scene that fails, or a missing GPU, is a note instead.
+pub fn report_figures(
+    material: &FabricMaterial,
+    args: &crate::render::ImageArgs,
+    progress: &mut dyn FnMut(&str),
+) -> (Vec<kshell::fit::html::Figure>, Vec<String>) {
+    let renderer = match kshell::render::Renderer::new() {
+        Ok(r) => r,
+        Err(e) => return (Vec::new(), vec![format!("no scene pictures: {e}")]),
+    };
+    let (mut figures, mut notes) = (Vec::new(), Vec::new());
+    for (kind, mesh, what) in REPORT_MESHES {
+        progress(&format!("scene {what} on {mesh}x{mesh}"));
+        let drawn = run_kind(kind, material, mesh, 8, 0)
+            .map_err(|e| e.to_string())
+            .and_then(|run| {
+                let d = &run.deformed;
+                let tess = kshell::render::Tessellation::new(
+                    d.sheet.model.basis.surface(),
+                    d.sheet.rest(),
+                    samples_per_face(mesh),
+                )
+                .map_err(|e| e.to_string())?;
+                let png = renderer
+                    .render_limit(&tess, &d.x, &args.options())
+                    .and_then(|i| i.png())
+                    .map_err(|e| e.to_string())?;
+                Ok((run, png))
+            });
+        match drawn {
+            Ok((run, png)) => figures.push(kshell::fit::html::Figure {
+                title: what.split(':').next().unwrap_or(what).to_string(),
+                caption: format!(
+                    "{what}; {mesh}x{mesh} mesh (fixed, no error estimate: see ks-fit scene for one), {:.1} s, equilibrium {}",
+                    run.seconds,
+                    if run.deformed.stable { "stable" } else { "NOT stable" }
+                ),
+                png,
+            }),
+            Err(e) => notes.push(format!("scene {what}: not drawn: {e}")),
+        }
+    }
+    (figures, notes)
 }
