@@ -187,7 +187,10 @@ fn check_report_page(path: &std::path::Path, tests: usize, angles: usize) {
             "external or active content: <{name}>"
         );
         if let Some(src) = n.attribute("src") {
-            assert!(src.starts_with("data:image/png;base64,"), "<{name} src={src:.40}>");
+            assert!(
+                src.starts_with("data:image/png;base64,"),
+                "<{name} src={src:.40}>"
+            );
         }
         if let Some(href) = n.attribute("href") {
             assert!(href.starts_with('#'), "<{name} href={href}>");
@@ -198,7 +201,10 @@ fn check_report_page(path: &std::path::Path, tests: usize, angles: usize) {
         .find(|n| n.has_tag_name("h2") && n.text() == Some("Errors per test"))
         .and_then(|h| h.next_siblings().find(|n| n.has_tag_name("table")))
         .expect("the error table");
-    let rows = error_table.children().filter(|n| n.has_tag_name("tr")).count();
+    let rows = error_table
+        .children()
+        .filter(|n| n.has_tag_name("tr"))
+        .count();
     assert_eq!(rows, tests + 1, "one row per test and a header");
     let plots = doc
         .descendants()

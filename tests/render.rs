@@ -157,6 +157,7 @@ fn a_flat_square_is_drawn_exactly_where_the_camera_projects_it() {
         view: View::Above,
         ground: Ground::Off,
         line_spacing: None,
+        frame: None,
     };
     let img = r.render_mesh(&square(side), &opts).unwrap();
     let cam = Camera::frame([0.0; 3], [side, side, 0.0], View::Above, 320, 240);

@@ -81,7 +81,11 @@ pub fn fit_html(r: &FitResult, source: &str, figures: &[Figure]) -> String {
     );
     let _ = writeln!(h, "<h1>Fit of {}</h1>", escape(source));
     let class = if verdict.passed() { "pass" } else { "fail" };
-    let _ = writeln!(h, "<p class=\"{class}\"><b>{}</b></p>", escape(&verdict.line));
+    let _ = writeln!(
+        h,
+        "<p class=\"{class}\"><b>{}</b></p>",
+        escape(&verdict.line)
+    );
     let _ = writeln!(
         h,
         "<p>Method {}, meshes {}, {:.1} s, {} model evaluations, {} Newton iterations.</p>",
@@ -116,8 +120,16 @@ pub fn fit_html(r: &FitResult, source: &str, figures: &[Figure]) -> String {
             );
         }
     }
-    let _ = writeln!(h, "<h2>Material file</h2>\n<pre>{}</pre>", escape(&material_toml(&r.material)));
-    let _ = writeln!(h, "<h2>Summary table</h2>\n<pre>{}</pre>", escape(&table(r)));
+    let _ = writeln!(
+        h,
+        "<h2>Material file</h2>\n<pre>{}</pre>",
+        escape(&material_toml(&r.material))
+    );
+    let _ = writeln!(
+        h,
+        "<h2>Summary table</h2>\n<pre>{}</pre>",
+        escape(&table(r))
+    );
     h.push_str("</body>\n</html>\n");
     h
 }
@@ -322,6 +334,9 @@ mod tests {
 
     #[test]
     fn escaping_covers_markup_characters() {
-        assert_eq!(escape("a<b & \"c\" 'd'>"), "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;");
+        assert_eq!(
+            escape("a<b & \"c\" 'd'>"),
+            "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;"
+        );
     }
 }

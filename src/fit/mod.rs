@@ -38,13 +38,13 @@
 
 mod bending;
 pub mod bootstrap;
+pub mod html;
 mod ladder;
 pub mod map;
 mod mesh_check;
 pub mod optim;
 pub mod plausible;
 pub mod preprocess;
-pub mod html;
 pub mod report;
 mod rigs;
 mod stages;

@@ -100,7 +100,7 @@ impl Camera {
             [-f[0], -f[1], -f[2], dot(f, eye)],
             [0.0, 0.0, 0.0, 1.0],
         ];
-        let (near, far) = ((dist - 3.0 * r).max(0.01 * dist), dist + 8.0 * r);
+        let (near, far) = ((dist - 3.0 * r).max(0.01 * dist), dist + 14.0 * r);
         let fy = 1.0 / half_y.tan();
         let proj = [
             [fy / aspect, 0.0, 0.0, 0.0],

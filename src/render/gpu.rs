@@ -442,19 +442,20 @@ impl Renderer {
         opts: &RenderOptions,
     ) -> Result<Image, RenderError> {
         let (w, h) = (opts.width, opts.height);
-        let cam = Camera::frame(d.lo, d.hi, opts.view, w, h);
+        let (lo, hi) = opts.frame.unwrap_or((d.lo, d.hi));
+        let cam = Camera::frame(lo, hi, opts.view, w, h);
         let ground = match opts.ground {
             Ground::On => true,
             Ground::Off => false,
-            Ground::Auto => hangs(d.lo, d.hi),
+            Ground::Auto => hangs(lo, hi),
         };
-        let size = (0..3).map(|c| d.hi[c] - d.lo[c]).fold(0.0, f64::max);
+        let size = (0..3).map(|c| hi[c] - lo[c]).fold(0.0, f64::max);
         let spacing = opts
             .line_spacing
             .unwrap_or_else(|| auto_line_spacing(d.uv_extent.max(1e-9)));
         let light = unit(LIGHT);
-        let (cx, cy) = (0.5 * (d.lo[0] + d.hi[0]), 0.5 * (d.lo[1] + d.hi[1]));
-        let reach = 2.5 * size;
+        let (cx, cy) = (0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]));
+        let reach = 5.0 * size;
         let frame = Frame {
             view_proj: cam.columns_f32(),
             eye: [cam.eye[0] as f32, cam.eye[1] as f32, cam.eye[2] as f32, 1.0],
@@ -471,7 +472,7 @@ impl Renderer {
                 0.0,
                 0.0,
             ],
-            ground: [(d.lo[2] - 0.03 * size) as f32, 0.0, 0.0, 0.0],
+            ground: [(lo[2] - 0.03 * size) as f32, 0.0, 0.0, 0.0],
             ground_rect: [
                 (cx - reach) as f32,
                 (cy - reach) as f32,

@@ -23,7 +23,7 @@ mod gpu;
 pub use camera::{Camera, View};
 pub use image::Image;
 pub use shape::{parse_shape, read_shape, RenderMesh};
-pub use tessellate::{Sample, Tessellation};
+pub use tessellate::{bounds, Sample, Tessellation};
 
 #[cfg(feature = "render")]
 pub use gpu::Renderer;
@@ -64,6 +64,9 @@ pub struct RenderOptions {
     /// Spacing of the warp and weft lines in metres of fabric (None: about 16 across the piece,
     /// rounded to 1, 2 or 5 × a power of ten).
     pub line_spacing: Option<f64>,
+    /// The box the camera frames and the ground is placed under (None: the shape's own), so
+    /// that several shapes drawn alike share one scale.
+    pub frame: Option<(crate::Vec3, crate::Vec3)>,
 }
 
 impl Default for RenderOptions {
@@ -74,6 +77,7 @@ impl Default for RenderOptions {
             view: View::Auto,
             ground: Ground::Auto,
             line_spacing: None,
+            frame: None,
         }
     }
 }

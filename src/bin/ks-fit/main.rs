@@ -113,9 +113,14 @@ enum Command {
     /// Render a shape (OBJ, e.g. a scene's shape.obj) to PNG on the GPU (a software Vulkan
     /// driver such as Mesa's lavapipe will do): the cloth with its warp (red) and weft (blue)
     /// lines where the file has texture coordinates in metres of fabric, lit from above.
+    /// Several shapes are drawn side by side at one scale, --image each.
     Render {
-        /// Wavefront OBJ shape.
-        file: PathBuf,
+        /// Wavefront OBJ shape(s).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Shapes per row when there are several (default: up to 5).
+        #[arg(long)]
+        columns: Option<usize>,
         /// PNG file to write.
         #[arg(long)]
         out: PathBuf,
@@ -379,9 +384,12 @@ fn main() -> ExitCode {
             out,
             max_strain,
         } => export::cmd_export(&material, format, &out, max_strain, force).map(|()| true),
-        Command::Render { file, out, image } => {
-            render::cmd_render(&file, &out, &image, force).map(|()| true)
-        }
+        Command::Render {
+            files,
+            out,
+            columns,
+            image,
+        } => render::cmd_render(&files, &out, columns, &image, force).map(|()| true),
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check {
             file,

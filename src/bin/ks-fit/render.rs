@@ -2,8 +2,10 @@
 //! (`scene.png`): options, the renderer's start-up, and what is said when there is no GPU.
 
 use crate::guard::Guard;
-use kshell::render::{parse_size, read_shape, Ground, RenderOptions, Renderer, View};
-use std::path::Path;
+use kshell::render::{
+    bounds, parse_size, read_shape, Ground, Image, RenderOptions, Renderer, View, BACKGROUND,
+};
+use std::path::{Path, PathBuf};
 
 /// Picture options shared by every command that draws.
 #[derive(clap::Args, Clone, Debug)]
@@ -49,6 +51,7 @@ impl ImageArgs {
                 GroundArg::Off => Ground::Off,
             },
             line_spacing: None,
+            frame: None,
         }
     }
 }
@@ -78,22 +81,48 @@ pub fn cleanup_driver_folder() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
-/// `ks-fit render`.
-pub fn cmd_render(file: &Path, out: &Path, args: &ImageArgs, force: bool) -> Result<(), String> {
+/// `ks-fit render`: one shape, or several side by side (`columns` per row) framed by one box so
+/// that they share a scale.
+pub fn cmd_render(
+    files: &[PathBuf],
+    out: &Path,
+    columns: Option<usize>,
+    args: &ImageArgs,
+    force: bool,
+) -> Result<(), String> {
     let mut guard = Guard::new(force);
-    guard.input(file);
+    for f in files {
+        guard.input(f);
+    }
     guard.file("--out", out)?;
-    let mesh = read_shape(file).map_err(|e| e.to_string())?;
+    if columns == Some(0) {
+        return Err("--columns must be at least 1".into());
+    }
+    let meshes = files
+        .iter()
+        .map(|f| read_shape(f).map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
     let renderer = Renderer::new().map_err(|e| e.to_string())?;
     let t0 = std::time::Instant::now();
-    let image = renderer
-        .render_mesh(&mesh, &args.options())
-        .map_err(|e| e.to_string())?;
+    let mut opts = args.options();
+    if meshes.len() > 1 {
+        let all: Vec<kshell::Vec3> = meshes.iter().flat_map(|m| m.positions.clone()).collect();
+        opts.frame = Some(bounds(&all));
+    }
+    let images = meshes
+        .iter()
+        .map(|m| renderer.render_mesh(m, &opts).map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let columns = columns.unwrap_or(images.len().min(5));
+    let image = Image::grid(&images, columns, BACKGROUND);
     let png = image.png().map_err(|e| e.to_string())?;
     kshell::io::write_atomic(out, png).map_err(|e| format!("writing {}: {e}", out.display()))?;
     eprintln!(
-        "ks-fit: render: {} triangles on {} in {:.2} s; wrote {}",
-        mesh.triangles.len(),
+        "ks-fit: render: {} shape(s), {} triangles, {}x{} on {} in {:.2} s; wrote {}",
+        meshes.len(),
+        meshes.iter().map(|m| m.triangles.len()).sum::<usize>(),
+        image.width,
+        image.height,
         renderer.adapter_name(),
         t0.elapsed().as_secs_f64(),
         out.display()

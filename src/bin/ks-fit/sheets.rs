@@ -200,7 +200,7 @@ fn run_kind(
         ..NewtonOptions::default()
     };
     let t0 = Instant::now();
-        let (qoi, csv, deformed) = match kind {
+    let (qoi, csv, deformed) = match kind {
         Kind::Drape => {
             let drape = Drape {
                 mesh,
@@ -509,9 +509,21 @@ fn picture(
 /// Meshes of the report's scene pictures: fixed, so that a report costs a predictable time (the
 /// corner pull's clips sit on cage lines at multiples of 10).
 const REPORT_MESHES: [(Kind, usize, &str); 3] = [
-    (Kind::Drape, 16, "drape: a 1 m sheet held by two corners brought 60 cm apart"),
-    (Kind::Frame(40.0), 16, "picture frame: a 10 cm square sheared 40°"),
-    (Kind::Corner(10.0), 20, "corner pull: a 10 cm square stretched 10 % along a diagonal"),
+    (
+        Kind::Drape,
+        16,
+        "drape: a 1 m sheet held by two corners brought 60 cm apart",
+    ),
+    (
+        Kind::Frame(40.0),
+        16,
+        "picture frame: a 10 cm square sheared 40°",
+    ),
+    (
+        Kind::Corner(10.0),
+        20,
+        "corner pull: a 10 cm square stretched 10 % along a diagonal",
+    ),
 ];
 
 /// The three showcase scenes on `material`, drawn for a fit's report (8 steps, seed 0, the
