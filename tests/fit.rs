@@ -165,6 +165,34 @@ fn noise_free_degree2_data_are_fitted_back() {
         "{csv}"
     );
     check_report_page(&report.join("index.html"), tests.len(), 5);
+    // and a browser draws it: the page at 1200 px wide, its first screen not blank
+    if let Some(png) = common::screenshot(
+        &report.join("index.html"),
+        &dir.join("page.png"),
+        1200,
+        1600,
+    ) {
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+        assert_eq!(&png[16..24], &[0, 0, 4, 176, 0, 0, 6, 64], "1200 x 1600");
+        #[cfg(feature = "render")]
+        {
+            let decoder = png::Decoder::new(std::io::Cursor::new(&png));
+            let mut reader = decoder.read_info().unwrap();
+            let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+            let info = reader.next_frame(&mut buf).unwrap();
+            let channels = info.color_type.samples();
+            let inked = buf
+                .chunks(channels)
+                .filter(|p| p[..3].iter().any(|&c| c < 200))
+                .count();
+            let share = inked as f64 / (1200.0 * 1600.0);
+            assert!(
+                share > 0.02,
+                "only {:.3} % of the page is drawn",
+                100.0 * share
+            );
+        }
+    }
 }
 
 /// The report's index.html parses (it is written as polyglot markup, so an XML parser is a

@@ -56,7 +56,7 @@ pub fn base64(bytes: &[u8]) -> String {
 }
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}\
-table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right}\
+table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}\
 th{background:#f3f3f3}td.l,th.l{text-align:left}.pass{color:#176b1e}.fail{color:#b00020}\
 pre{background:#f7f7f7;padding:0.6em;overflow-x:auto}figure{display:inline-block;margin:0.5em}\
 figure img{max-width:100%}.und{color:#777}";
@@ -181,10 +181,10 @@ fn tests_section(h: &mut String, r: &FitResult) {
     let judged = super::verdict::judge(r, r.max_error);
     let _ = writeln!(
         h,
-        "<h2>Errors per test</h2>\n<p>Mean |relative error| of each curve at its nominal angle (the number judged); diagnostics beside it. Limit: {} %.</p>",
-        r.max_error
+        "<h2>Errors per test</h2>\n<p>Mean |relative error| of each curve at its nominal angle; the error judged against --max-error {} % (a repeat's force scale outside the repeats' scatter band, a bend's drape angle) and the diagnostics beside it.</p>",
+        100.0 * r.max_error
     );
-    h.push_str("<table><tr><th class=\"l\">kind</th><th>angle</th><th class=\"l\">curve</th><th>repeat</th><th>error</th><th>drape angle (target)</th><th>misalign</th><th>aligned error</th><th>toe (mm)</th><th>mesh</th><th>mesh error</th><th>fitted</th><th>verdict</th></tr>\n");
+    h.push_str("<table><tr><th class=\"l\">kind</th><th>angle</th><th class=\"l\">curve</th><th>repeat</th><th>error</th><th>scale</th><th>scaled error</th><th>judged error</th><th>drape angle (target)</th><th>misalign</th><th>aligned error</th><th>toe (mm)</th><th>mesh</th><th>mesh error</th><th>fitted</th><th>verdict</th></tr>\n");
     for (t, j) in r.tests.iter().zip(&judged) {
         let class = match j.mark {
             "OVER" => " class=\"fail\"",
@@ -193,12 +193,15 @@ fn tests_section(h: &mut String, r: &FitResult) {
         };
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td{class}>{}</td></tr>",
+            "<tr><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td{class}>{}</td></tr>",
             t.kind,
             t.angle_deg,
             escape(t.curve.as_deref().unwrap_or("-")),
             t.repeat.map_or("-".into(), |k| k.to_string()),
             pct(t.avg_rel_error),
+            t.repeat_scale.map_or("-".into(), |k| format!("{k:.3}")),
+            pct(t.avg_rel_error_scaled),
+            pct(j.error),
             match (t.drape_angle_deg, t.target_drape_deg) {
                 (Some(a), Some(g)) => format!("{a:.2}° ({g:.1}°)"),
                 _ => "-".into(),

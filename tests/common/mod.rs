@@ -36,3 +36,59 @@ pub fn ks_fit_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) 
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// A headless browser on this machine (Debian's `chromium`, or Chrome), if any.
+pub fn browser() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    for dir in std::env::split_paths(&path) {
+        for name in ["chromium", "chromium-browser", "google-chrome"] {
+            let p = dir.join(name);
+            if p.is_file() {
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+/// Renders a local HTML file to a PNG of `width` × `height` with the headless browser, with
+/// no network (flags as this machine's notes give for a root, offline Chromium). Returns the
+/// PNG's bytes; None when there is no browser (a panic when KSHELL_REQUIRE_BROWSER is set).
+pub fn screenshot(html: &Path, png: &Path, width: u32, height: u32) -> Option<Vec<u8>> {
+    let Some(exe) = browser() else {
+        assert!(
+            std::env::var_os("KSHELL_REQUIRE_BROWSER").is_none(),
+            "KSHELL_REQUIRE_BROWSER is set but no chromium is on PATH"
+        );
+        eprintln!("no headless browser: the page is not rendered (set KSHELL_REQUIRE_BROWSER to require it)");
+        return None;
+    };
+    let profile = png.with_extension("profile");
+    let url = format!("file://{}", html.canonicalize().unwrap().display());
+    let out = Command::new(exe)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--hide-scrollbars",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(format!("--window-size={width},{height}"))
+        .arg(format!("--screenshot={}", png.display()))
+        .arg(url)
+        .output()
+        .expect("run the browser");
+    let bytes = std::fs::read(png).unwrap_or_else(|e| {
+        panic!(
+            "the browser wrote no screenshot ({e}): {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    });
+    let _ = std::fs::remove_dir_all(&profile);
+    Some(bytes)
+}
