@@ -186,3 +186,73 @@ fn model_tables_are_read_and_misuse_is_explained() {
     assert_eq!(rc, 2);
     assert!(err.contains("run with --model soft-constraints"), "{err}");
 }
+
+/// `synth --model`: a dataset made by a triangle model. The stvk-ds warp strip is uniform with
+/// no Poisson coupling, so every point of its curve is the closed form of
+/// `tensile_with_a_triangle_model_prints_the_shells_csv_and_the_closed_form`; a `[model]` table
+/// needs a thickness beside it, and the shell's grading is refused.
+#[test]
+fn synth_with_a_triangle_model_writes_that_models_curves() {
+    let dir = folder("synth-model");
+    let out = dir.join("data");
+    let (rc, _, err) = ks_fit(&[
+        "synth",
+        "--material",
+        COTTON,
+        "--out",
+        out.to_str().unwrap(),
+        "--model",
+        "stvk-ds",
+        "--points",
+        "4",
+        "--mesh",
+        "4x6",
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let toml = std::fs::read_to_string(out.join("fabric.toml")).unwrap();
+    assert!(toml.contains("(model stvk-ds)"), "{toml}");
+    let csv = std::fs::read_to_string(out.join("warp-1.csv")).unwrap();
+    let k = (2e8 - 6e7 * 6e7 / 1.2e8) * 1.8e-4;
+    let mut rows = 0;
+    for row in csv.lines().skip(1) {
+        let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
+        let e = v[0] * 1e-3 / 0.075;
+        let exact = k * (e + e * e / 2.0) * (1.0 + e) * 0.05;
+        assert!((v[1] / exact - 1.0).abs() < 1e-6, "{row}: exact {exact}");
+        rows += 1;
+    }
+    assert_eq!(rows, 4);
+    // the dataset loads and has both bends at 41.5°
+    let (data, _) = kshell::dataset::load_dataset(&out.join("fabric.toml")).unwrap();
+    assert_eq!(data.bend.len(), 2);
+
+    let table = dir.join("ds.toml");
+    std::fs::write(
+        &table,
+        "name = \"t\"\nareal_density_g_m2 = 100.0\n[model]\nkind = \"stvk-ds\"\n\
+         stretch_warp_n_per_m = [30000.0]\nstretch_weft_n_per_m = [20000.0]\n\
+         shear_n_per_m = [400.0]\nbend_warp_n_m = [8e-5]\nbend_weft_n_m = [5e-5]\n\
+         bend_diag_n_m = [6e-5]\n",
+    )
+    .unwrap();
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "synth".to_string(),
+            "--material".into(),
+            table.to_str().unwrap().into(),
+            "--out".into(),
+            dir.join("d2").to_str().unwrap().into(),
+            "--model".into(),
+            "stvk-ds".into(),
+        ];
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let run = |a: Vec<String>| ks_fit(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let (rc, _, err) = run(args(&[]));
+    assert_eq!(rc, 2);
+    assert!(err.contains("needs thickness_mm"), "{err}");
+    let (rc, _, err) = run(args(&["--grading", "0.5"]));
+    assert_eq!(rc, 2);
+    assert!(err.contains("--grading applies to the kl model"), "{err}");
+}

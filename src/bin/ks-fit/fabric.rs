@@ -334,23 +334,77 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     Ok(())
 }
 
+/// The model `synth --model` runs, read from the material file.
+fn lab_model(material: &Path, model: &str) -> Result<kshell::synth::LabModel, String> {
+    use kshell::synth::LabModel;
+    use kshell::tri::file::{load_tri, TriSource};
+    if model == "kl" {
+        return Ok(LabModel::Shell(
+            load_material(material).map_err(|e| e.to_string())?,
+        ));
+    }
+    let kind: kshell::tri::TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
+    let source = load_tri(material, kind).map_err(|e| e.to_string())?;
+    let (name, thickness) = match &source {
+        TriSource::Shell(m) => (m.name.clone(), m.thickness),
+        TriSource::Table(_) => {
+            // a [model] table has no thickness; the dataset records the file's thickness_mm
+            let text = std::fs::read_to_string(material)
+                .map_err(|e| format!("{}: {e}", material.display()))?;
+            let doc: toml::Table = text
+                .parse()
+                .map_err(|e| format!("{}: {e}", material.display()))?;
+            let number = |k: &str| {
+                doc.get(k)
+                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+            };
+            let thickness = number("thickness_mm").filter(|t| t.is_finite() && *t > 0.0).ok_or_else(|| {
+                format!(
+                    "{}: synth --model {model} needs thickness_mm (a positive number) beside the [model] table: the dataset records the fabric's thickness",
+                    material.display()
+                )
+            })?;
+            let name = doc
+                .get("name")
+                .and_then(|v| v.as_str())
+                .unwrap_or(model)
+                .to_string();
+            (name, thickness * 1e-3)
+        }
+    };
+    Ok(LabModel::Tri {
+        kind,
+        source,
+        name,
+        thickness,
+    })
+}
+
 pub fn cmd_synth(
     material: &Path,
     out: &Path,
+    model: &str,
     opts: &kshell::synth::SynthOptions,
     force: bool,
 ) -> Result<(), String> {
-    let mat = load_material(material).map_err(|e| e.to_string())?;
+    if model != "kl" && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
+        return Err(format!(
+            "--grading applies to the kl model's strip cage, not to --model {model}"
+        ));
+    }
+    let lab = lab_model(material, model)?;
     let mut guard = Guard::new(force);
     guard.input(material);
     guard.folder("--out", out, "fabric.toml")?;
     let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
-    let data = kshell::synth::synthesize(&mat, opts, &mut progress).map_err(|e| e.to_string())?;
+    let data =
+        kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
     let comment = format!(
-        "SYNTHETIC dataset written by ks-fit synth from the material {}\n\
+        "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
          options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{}\n\
          tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees",
         material.display(),
+        lab.model_name(),
         opts.max_strain,
         opts.points,
         opts.repeats,

@@ -293,6 +293,12 @@ enum Command {
         /// bias strip's force 4–6 times more accurate on the same mesh).
         #[arg(long, value_parser = parse_grading, default_value = "0")]
         grading: kshell::mesh::Grading,
+        /// Model the virtual lab runs: kl (the subdivision shell) or a triangle model
+        /// (springs, soft-constraints, stvk-ds, xpbd) from the file's [model] table or converted
+        /// from its shell law: data another discretisation made, to fit with any model.
+        /// Triangle strips use --mesh and no grading.
+        #[arg(long, default_value = "kl")]
+        model: String,
     },
 }
 
@@ -469,9 +475,11 @@ fn main() -> ExitCode {
             seed,
             mesh,
             grading,
+            model,
         } => cmd_synth(
             &material,
             &out,
+            &model,
             &kshell::synth::SynthOptions {
                 max_strain,
                 points,

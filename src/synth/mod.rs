@@ -17,10 +17,16 @@
 //!   1 + REL/10·z; with `misalign_deg` each repeat's strip is cut at its nominal angle + DEG·z
 //!   (the dataset records the nominal angle). Bends are exact. The random numbers (splitmix64
 //!   and Box–Muller) depend only on `seed`; noise 0 and misalignment 0 give the exact curves.
+//! * The lab runs the shell, or any triangle model ([`LabModel`], `ks-fit synth --model`), on
+//!   the same strips and cantilevers: data that another discretisation made.
+
+mod lab;
+
+pub use lab::LabModel;
 
 use crate::dataset::{BendTest, FabricDataset, TensileTest, DEFAULT_DRAPE_ANGLE_DEG};
 use crate::material::FabricMaterial;
-use crate::scene::{CantileverBend, SceneError, TensileStrip};
+use crate::scene::{CantileverBend, SceneError};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -188,18 +194,24 @@ pub fn synthesize(
     opts: &SynthOptions,
     progress: &mut dyn FnMut(&str),
 ) -> Result<FabricDataset, SynthError> {
+    synthesize_with(&LabModel::Shell(material.clone()), opts, progress)
+}
+
+/// [`synthesize`] on any model of the fabric.
+pub fn synthesize_with(
+    lab: &LabModel,
+    opts: &SynthOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<FabricDataset, SynthError> {
     opts.check()?;
     let start = Instant::now();
-    let tensile = synth_tensile(material, opts, start, progress)?;
+    let tensile = synth_tensile(lab, opts, start, progress)?;
     let mut bend = Vec::new();
-    for (angle, stem, a) in [
-        (90.0, "warp", material.law.a11),
-        (0.0, "weft", material.law.a22),
-    ] {
+    for (angle, stem) in [(90.0, "warp"), (0.0, "weft")] {
         let t0 = Instant::now();
         let test = format!("cantilever {stem} ({angle}°)");
         let solves = std::cell::Cell::new(0);
-        let overhang = find_overhang(material, angle, a, &test, &solves)?;
+        let overhang = find_overhang(lab, angle, &test, &solves)?;
         progress(&format!(
             "{test}: overhang {:.4} mm for {:.5}° ({} solves) in {:.2} s (elapsed {:.1} s)",
             overhang.0 * 1e3,
@@ -216,10 +228,10 @@ pub fn synthesize(
         });
     }
     Ok(FabricDataset {
-        name: format!("{}-synthetic", material.name),
+        name: format!("{}-synthetic", lab.name()),
         path: PathBuf::from("fabric.toml"),
-        areal_density: Some(material.areal_density),
-        thickness: material.thickness,
+        areal_density: Some(lab.areal_density()),
+        thickness: lab.thickness(),
         tensile,
         bend,
         known: Default::default(),
@@ -229,7 +241,7 @@ pub fn synthesize(
 
 /// The tensile curves of [`synthesize`], in [`SYNTH_TENSILE`] order, repeats together.
 fn synth_tensile(
-    material: &FabricMaterial,
+    lab: &LabModel,
     opts: &SynthOptions,
     start: Instant,
     progress: &mut dyn FnMut(&str),
@@ -241,24 +253,22 @@ fn synth_tensile(
         .map(|i| opts.max_strain * gauge * i as f64 / n as f64)
         .collect();
     let run_strip = |angle: f64, test: &str| -> Result<Vec<f64>, SynthError> {
-        let mut strip = TensileStrip::new(width, gauge, angle);
-        strip.mesh = opts.mesh;
-        strip.grading = opts.grading;
-        // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
-        strip.solver.max_iterations = 500;
-        let curve = strip
-            .run(material, &elongations)
+        let curve = lab
+            .strip((width, gauge, angle), opts.mesh, opts.grading, &elongations)
             .map_err(|source| SynthError::Scene {
                 test: test.to_string(),
                 source,
             })?;
-        if let Some(p) = curve.iter().find(|p| !p.report.stable) {
+        if let Some(k) = curve.iter().position(|p| !p.1) {
             return Err(SynthError::Unstable {
                 test: test.to_string(),
-                what: format!("the equilibrium at elongation {:.4} mm", p.elongation * 1e3),
+                what: format!(
+                    "the equilibrium at elongation {:.4} mm",
+                    elongations[k] * 1e3
+                ),
             });
         }
-        Ok(curve.iter().map(|p| p.force).collect())
+        Ok(curve.iter().map(|p| p.0).collect())
     };
     let mut tensile = Vec::new();
     for (angle, stem) in SYNTH_TENSILE {
@@ -305,28 +315,22 @@ fn synth_tensile(
     Ok(tensile)
 }
 
-/// The overhang (m) whose drape angle is 41.5° and that angle, for a cantilever cut at `angle`
-/// with initial membrane stiffness `a` (Pa) along it.
+/// The overhang (m) whose drape angle is 41.5° and that angle, for a cantilever cut at `angle`.
 fn find_overhang(
-    material: &FabricMaterial,
+    lab: &LabModel,
     angle: f64,
-    a: f64,
     test: &str,
     solves: &std::cell::Cell<usize>,
 ) -> Result<(f64, f64), SynthError> {
     let target = DEFAULT_DRAPE_ANGLE_DEG;
-    let tau = material.thickness;
-    let weight = material.areal_density * crate::assembly::STANDARD_GRAVITY;
-    let rigidity = match &material.bending {
-        Some(b) => b.at_angle(angle),
-        None => a * tau.powi(3) / 12.0,
-    };
+    let weight = lab.areal_density() * crate::assembly::STANDARD_GRAVITY;
+    let rigidity = lab.rigidity_guess(angle);
     let c = (rigidity / weight).cbrt();
     let mut guess = 2.0 * c;
     if !(guess.is_finite() && guess > 0.0) {
         return Err(SynthError::Bracket(format!(
-            "{test}: no bending length from a = {a} Pa, τ = {tau} m, ρ = {} kg/m²",
-            material.areal_density
+            "{test}: no bending length from a rigidity of {rigidity} N·m and {} kg/m²",
+            lab.areal_density()
         )));
     }
     // the mesh follows the overhang as `CantileverBend::new` chooses it; it is held during a
@@ -335,7 +339,7 @@ fn find_overhang(
     let mut last = None;
     for _ in 0..4 {
         let mesh = synth_bend_mesh(guess, angle);
-        let found = search(material, angle, mesh, guess, target, test, solves)?;
+        let found = search(lab, angle, mesh, guess, target, test, solves)?;
         last = Some(found);
         if synth_bend_mesh(found.0, angle) == mesh {
             return Ok(found);
@@ -348,7 +352,7 @@ fn find_overhang(
 /// Secant steps in ln(overhang) on a fixed mesh from `guess`, kept inside the bracket once
 /// there is one (bisection when a step leaves it).
 fn search(
-    material: &FabricMaterial,
+    lab: &LabModel,
     angle: f64,
     mesh: (usize, usize),
     guess: f64,
@@ -359,19 +363,19 @@ fn search(
     let f = |ln_l: f64| -> Result<f64, SynthError> {
         solves.set(solves.get() + 1);
         let l = ln_l.exp();
-        let mut bend = CantileverBend::new(BEND_WIDTH, l, angle);
-        bend.mesh = mesh;
-        let r = bend.run(material).map_err(|source| SynthError::Scene {
-            test: format!("{test} at overhang {:.4} mm", l * 1e3),
-            source,
-        })?;
-        if !r.report.stable {
+        let (drape, stable) = lab
+            .cantilever((BEND_WIDTH, l, angle), mesh)
+            .map_err(|source| SynthError::Scene {
+                test: format!("{test} at overhang {:.4} mm", l * 1e3),
+                source,
+            })?;
+        if !stable {
             return Err(SynthError::Unstable {
                 test: test.to_string(),
                 what: format!("the cantilever at overhang {:.4} mm", l * 1e3),
             });
         }
-        Ok(r.drape_angle_deg - target)
+        Ok(drape - target)
     };
     // the drape angle grows with the overhang, about 60° per unit of ln(overhang) near 41.5°
     let (mut x0, mut f0) = (guess.ln(), f(guess.ln())?);
