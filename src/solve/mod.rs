@@ -17,6 +17,7 @@
 
 mod continuation;
 mod curvature;
+pub mod dump;
 mod linearization;
 mod newton;
 pub mod refine;

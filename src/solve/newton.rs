@@ -70,10 +70,14 @@ pub fn newton_linearized(
     x: &mut [Vec3],
     opts: &NewtonOptions,
 ) -> Result<(SolveReport, Option<Linearization>), SolveError> {
-    match opts.strategy {
+    let result = match opts.strategy {
         Strategy::TrustRegion => super::trust::trust_region(model, system, x, opts),
         _ => line_search(model, system, x, opts),
+    };
+    if let Err(e) = &result {
+        super::dump::on_failure(model, system, x, e);
     }
+    result
 }
 
 /// Newton with the energy line search and the backward-Euler fallback (see [`newton`]).
