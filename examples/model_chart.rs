@@ -6,128 +6,9 @@
 //!
 //! `cargo run --release --example model_chart` (about two minutes on two cores).
 
-use kshell::converge::{analyse, Level};
-use kshell::material::{load_material, FabricMaterial};
-use kshell::scene::{CantileverBend, TensileStrip};
-use kshell::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
+use kshell::material::load_material;
+use kshell::model::compare::{compare, LabTest, Run};
 use std::fmt::Write;
-use std::time::Instant;
-
-/// Median wall time of three runs and the value.
-fn timed(mut f: impl FnMut() -> Option<f64>) -> Option<(f64, f64)> {
-    let mut times = Vec::new();
-    let mut value = None;
-    for _ in 0..3 {
-        let t = Instant::now();
-        value = f();
-        times.push(t.elapsed().as_secs_f64());
-        value?;
-    }
-    times.sort_by(f64::total_cmp);
-    value.map(|v| (times[1], v))
-}
-
-struct Point {
-    model: &'static str,
-    mesh: (usize, usize),
-    seconds: f64,
-    value: f64,
-}
-
-fn tensile(m: &FabricMaterial, angle: f64) -> Vec<Point> {
-    let dl = [1.5e-3];
-    let mut out = Vec::new();
-    for mesh in [(8, 12), (16, 24), (32, 48)] {
-        let mut s = TensileStrip::new(0.05, 0.075, angle);
-        s.mesh = mesh;
-        if let Some((t, v)) = timed(|| s.run(m, &dl).ok().map(|p| p[0].force)) {
-            out.push(Point {
-                model: "kl",
-                mesh,
-                seconds: t,
-                value: v,
-            });
-        }
-    }
-    for (name, kind) in TriKind::ALL {
-        for mesh in [(8, 12), (16, 24), (32, 48)] {
-            let Ok(tm) = TriMaterial::equivalent(kind, m, 0.05 / mesh.0 as f64, 100.0) else {
-                continue;
-            };
-            let mut s = TriTensile::new(0.05, 0.075, angle);
-            s.mesh = mesh;
-            if let Some((t, v)) = timed(|| s.run(&tm, &dl).ok().map(|p| p[0].force)) {
-                out.push(Point {
-                    model: name,
-                    mesh,
-                    seconds: t,
-                    value: v,
-                });
-            }
-        }
-    }
-    out
-}
-
-fn bend(m: &FabricMaterial) -> Vec<Point> {
-    let base = CantileverBend::new(0.025, 0.0477, 90.0).mesh;
-    let meshes: Vec<_> = (0..3).map(|k| (base.0 << k, base.1 << k)).collect();
-    let mut out = Vec::new();
-    for &mesh in &meshes {
-        let mut b = CantileverBend::new(0.025, 0.0477, 90.0);
-        b.mesh = mesh;
-        if let Some((t, v)) = timed(|| b.run(m).ok().map(|r| r.drape_angle_deg)) {
-            out.push(Point {
-                model: "kl",
-                mesh,
-                seconds: t,
-                value: v,
-            });
-        }
-    }
-    for (name, kind) in TriKind::ALL {
-        for &mesh in &meshes {
-            let Ok(tm) = TriMaterial::equivalent(kind, m, 0.025 / mesh.0 as f64, 100.0) else {
-                continue;
-            };
-            let mut c = TriCantilever::new(0.025, 0.0477, 90.0);
-            c.mesh = mesh;
-            if let Some((t, v)) = timed(|| c.run(&tm).ok().map(|r| r.drape_angle_deg)) {
-                out.push(Point {
-                    model: name,
-                    mesh,
-                    seconds: t,
-                    value: v,
-                });
-            }
-        }
-    }
-    out
-}
-
-/// The shell's extrapolated value.
-fn reference(points: &[Point]) -> f64 {
-    let levels = points
-        .iter()
-        .filter(|p| p.model == "kl")
-        .map(|p| Level {
-            mesh: p.mesh,
-            dofs: 0,
-            seconds: p.seconds,
-            qoi: p.value,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        })
-        .collect();
-    let study = analyse(levels);
-    study.extrapolated.unwrap_or_else(|| {
-        points
-            .iter()
-            .rfind(|p| p.model == "kl")
-            .map_or(f64::NAN, |p| p.value)
-    })
-}
 
 const COLOURS: [(&str, &str); 5] = [
     ("kl", "#000000"),
@@ -137,7 +18,7 @@ const COLOURS: [(&str, &str); 5] = [
     ("xpbd", "#9467bd"),
 ];
 
-fn svg(title: &str, points: &[Point], reference: f64) -> String {
+fn svg(title: &str, points: &[Run], reference: f64) -> String {
     let (w, h, pad) = (640.0, 420.0, 60.0);
     let xs: Vec<f64> = points.iter().map(|p| p.seconds.max(1e-5).log10()).collect();
     let ys: Vec<f64> = points
@@ -233,25 +114,36 @@ fn main() {
     let dir = std::path::Path::new("paper_repro/models");
     std::fs::create_dir_all(dir).expect("output folder");
     let mut md = String::from("# Speed against accuracy across cloth models\n\nWritten by `cargo run --release --example model_chart` (2 cores; times are medians of three runs).\nThe example cotton (linear: a₁₁ 2e8, a₂₂ 1.2e8, G₁₂ 4e6 Pa, τ 0.18 mm) as the shell and as each\ntriangle model converted from its zero-strain moduli (`TriMaterial::equivalent`), NOT fitted:\nthe errors are discretisation plus what each model's form cannot represent of the shell.\nReference: the shell's Richardson extrapolation over its three meshes.\n");
-    let cases: Vec<(&str, &str, Vec<Point>)> = vec![
+    let strip = |angle_deg| LabTest::Tensile {
+        angle_deg,
+        width: 0.05,
+        length: 0.075,
+        elongation: 1.5e-3,
+    };
+    let cases = [
         (
             "tensile_90",
             "warp strip 50 × 75 mm, force at 1.5 mm (N)",
-            tensile(&m, 90.0),
+            strip(90.0),
         ),
         (
             "tensile_45",
             "bias strip 50 × 75 mm, force at 1.5 mm (N)",
-            tensile(&m, 45.0),
+            strip(45.0),
         ),
         (
             "bend_90",
             "warp cantilever 25 × 47.7 mm, drape angle (°)",
-            bend(&m),
+            LabTest::Bend {
+                angle_deg: 90.0,
+                width: 0.025,
+                overhang: 0.0477,
+            },
         ),
     ];
-    for (file, title, points) in &cases {
-        let r = reference(points);
+    for (file, title, test) in cases {
+        let c = compare(&m, &[], test, 3, &mut |_| {});
+        let (r, points) = (c.reference, &c.runs);
         let _ = writeln!(md, "\n## {title}\n\nreference {r:.6}; chart `{file}.svg`\n\n| model | mesh | value | relative error | seconds |\n|---|---|---|---|---|");
         for p in points {
             let _ = writeln!(

@@ -5,6 +5,8 @@
 //! Miguel et al. 2012 ([`crate::tri`]) are the others. Everything in [`crate::solve`] works on
 //! any of them.
 
+pub mod compare;
+
 use crate::assembly::{BlockMatrix, BlockPattern, ShellModel, Want};
 use crate::material::OutOfDomain;
 use crate::Vec3;

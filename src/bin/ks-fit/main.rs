@@ -7,6 +7,7 @@ mod fabric;
 mod guard;
 mod mesh;
 mod models;
+mod recommend;
 mod render;
 mod scene;
 mod sheets;
@@ -109,6 +110,14 @@ enum Command {
     Scene {
         #[command(subcommand)]
         scene: sheets::ShowScene,
+    },
+    /// The cheapest cloth model and mesh for one lab test: the shell and every triangle model
+    /// (converted from the material, or fitted: --fits) on three meshes each, timed, their
+    /// error against the converged shell; prints the table (CSV) and the recommendation. Exit
+    /// code 3 when no run meets --tol.
+    Recommend {
+        #[command(flatten)]
+        args: recommend::RecommendArgs,
     },
     /// Render a shape (OBJ, e.g. a scene's shape.obj) to PNG on the GPU (a software Vulkan
     /// driver such as Mesa's lavapipe will do): the cloth with its warp (red) and weft (blue)
@@ -396,6 +405,7 @@ fn main() -> ExitCode {
             columns,
             image,
         } => render::cmd_render(&files, &out, columns, &image, force).map(|()| true),
+        Command::Recommend { args } => recommend::cmd_recommend(&args),
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check {
             file,

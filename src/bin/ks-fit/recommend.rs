@@ -1,0 +1,177 @@
+//! `ks-fit recommend`: the cheapest cloth model and mesh whose error in one lab test is below a
+//! tolerance, with the table it chose from (`kshell::model::compare`).
+
+use kshell::material::load_material;
+use kshell::model::compare::{compare, LabTest};
+use kshell::tri::file::{model_only, parse_tri, TriSource};
+use kshell::tri::ZeroStrain;
+use std::path::PathBuf;
+
+#[derive(clap::Args)]
+pub struct RecommendArgs {
+    /// The shell material (TOML): the reference, and the triangle models' parameters where
+    /// --fits gives none.
+    #[arg(long)]
+    material: PathBuf,
+    /// The test to compare on: tensile or bend (the showcase scenes run on the shell only).
+    #[arg(long, value_parser = ["tensile", "bend", "drape", "picture-frame", "corner-pull"])]
+    scene: String,
+    /// Largest relative error against the converged shell accepted.
+    #[arg(long, default_value_t = 0.01)]
+    tol: f64,
+    /// Cut angle from the weft, degrees (90 warp).
+    #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
+    angle: f64,
+    /// Strip or cantilever width, mm (default 50 for a strip, 25 for a cantilever).
+    #[arg(long)]
+    width: Option<f64>,
+    /// Gauge length of a strip, mm.
+    #[arg(long, default_value_t = 75.0)]
+    length: f64,
+    /// Elongation of a strip, mm (default 2 % of the gauge length).
+    #[arg(long)]
+    to: Option<f64>,
+    /// Overhang of a cantilever, mm (default twice the bending length (B/(ρg))^⅓ of the
+    /// material at this angle, about where D1388's 41.5° is reached).
+    #[arg(long)]
+    overhang: Option<f64>,
+    /// Material files with a fitted triangle model's [model] table (from `ks-fit fit --model`),
+    /// used for their models instead of converting the shell's moduli.
+    #[arg(long, num_args = 1..)]
+    fits: Vec<PathBuf>,
+    /// Runs per model and mesh (the median time is kept).
+    #[arg(long, default_value_t = 3)]
+    repeats: usize,
+}
+
+/// Runs `ks-fit recommend`; `Ok(false)` when no run meets the tolerance.
+pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
+    if a.scene != "tensile" && a.scene != "bend" {
+        return Err(format!(
+            "recommend --scene {}: the triangle models do not run the showcase scenes yet, so the only candidate is the shell; `ks-fit scene {} --tol REL` picks its cheapest mesh meeting REL",
+            a.scene, a.scene
+        ));
+    }
+    if !(a.tol > 0.0 && a.tol < 1.0) {
+        return Err(format!("--tol must be in (0, 1), got {}", a.tol));
+    }
+    if a.repeats == 0 || a.repeats > 100 {
+        return Err(format!("--repeats must be 1 to 100, got {}", a.repeats));
+    }
+    let shell = load_material(&a.material).map_err(|e| e.to_string())?;
+    let mut fitted = Vec::new();
+    for f in &a.fits {
+        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let kind_name = model_only(&text).ok_or_else(|| {
+            format!(
+                "{}: --fits takes files with a [model] table and no shell law (the output of ks-fit fit --model)",
+                f.display()
+            )
+        })?;
+        let kind = kind_name
+            .parse()
+            .map_err(|e: String| format!("{}: {e}", f.display()))?;
+        match parse_tri(&text, &f.display().to_string(), kind).map_err(|e| e.to_string())? {
+            TriSource::Table(t) => fitted.push(t),
+            TriSource::Shell(_) => unreachable!("model_only said it has a [model] table"),
+        }
+    }
+    let positive = |name: &str, v: f64| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("{name} must be a positive number of mm, got {v}"))
+        }
+    };
+    let test = if a.scene == "tensile" {
+        let width = positive("--width", a.width.unwrap_or(50.0))? * 1e-3;
+        let length = positive("--length", a.length)? * 1e-3;
+        let to = positive("--to", a.to.unwrap_or(0.02 * a.length))? * 1e-3;
+        LabTest::Tensile {
+            angle_deg: a.angle,
+            width,
+            length,
+            elongation: to,
+        }
+    } else {
+        let width = positive("--width", a.width.unwrap_or(25.0))? * 1e-3;
+        let overhang = match a.overhang {
+            Some(o) => positive("--overhang", o)? * 1e-3,
+            None => {
+                let b = ZeroStrain::of(&shell)?.bending;
+                let rigidity = if a.angle >= 45.0 { b[0] } else { b[1] };
+                let weight = shell.areal_density * kshell::assembly::STANDARD_GRAVITY;
+                2.0 * (rigidity / weight).cbrt()
+            }
+        };
+        LabTest::Bend {
+            angle_deg: a.angle,
+            width,
+            overhang,
+        }
+    };
+    let mut progress = |line: &str| eprintln!("ks-fit: recommend: {line}");
+    let c = compare(&shell, &fitted, test, a.repeats, &mut progress);
+    for f in &c.failures {
+        eprintln!("ks-fit: recommend: failed: {f}");
+    }
+    let what = match test {
+        LabTest::Tensile { elongation, .. } => {
+            format!("force at {:.3} mm (N)", elongation * 1e3)
+        }
+        LabTest::Bend { overhang, .. } => {
+            format!("drape angle at {:.2} mm overhang (deg)", overhang * 1e3)
+        }
+    };
+    println!(
+        "# {}: {what}; reference {:.6} from {}",
+        a.scene, c.reference, c.reference_from
+    );
+    println!("model,params,mesh,seconds,value,rel_error,within_tol");
+    let mut runs = c.runs.clone();
+    runs.sort_by(|x, y| x.seconds.total_cmp(&y.seconds));
+    for r in &runs {
+        println!(
+            "{},{},{}x{},{:.4},{:.6},{:.3e},{}",
+            r.model,
+            r.params,
+            r.mesh.0,
+            r.mesh.1,
+            r.seconds,
+            r.value,
+            r.error,
+            if r.error <= a.tol { "yes" } else { "no" }
+        );
+    }
+    match c.cheapest_within(a.tol) {
+        Some(r) => {
+            println!(
+                "recommended: {} ({}) on {}x{}: error {:.2} % in {:.3} s (--tol {} %)",
+                r.model,
+                r.params,
+                r.mesh.0,
+                r.mesh.1,
+                100.0 * r.error,
+                r.seconds,
+                100.0 * a.tol
+            );
+            Ok(true)
+        }
+        None => {
+            let best = runs.iter().min_by(|x, y| x.error.total_cmp(&y.error));
+            println!(
+                "recommended: none meets --tol {} %{}",
+                100.0 * a.tol,
+                best.map_or(String::new(), |r| format!(
+                    "; the most accurate is {} ({}) on {}x{} at {:.2} %",
+                    r.model,
+                    r.params,
+                    r.mesh.0,
+                    r.mesh.1,
+                    100.0 * r.error
+                ))
+            );
+            Ok(false)
+        }
+    }
+}

@@ -1,0 +1,242 @@
+//! Speed against accuracy across cloth models (the user's request, which none of the three
+//! papers answers): one lab test run by the shell and by each triangle model on a ladder of
+//! meshes, each run's wall time (median of several) and its error against the converged shell
+//! (Richardson extrapolation over the shell's ladder), and the cheapest run whose error meets a
+//! tolerance. Used by `ks-fit recommend` and `examples/model_chart.rs`.
+
+use crate::converge::{analyse, Level};
+use crate::material::FabricMaterial;
+use crate::scene::{CantileverBend, TensileStrip};
+use crate::tri::file::SPRING_CURVATURE;
+use crate::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
+use std::time::Instant;
+
+/// The test whose quantity is compared.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LabTest {
+    /// A strip's force (N) at `elongation`; lengths in m, angle from the weft in degrees.
+    Tensile {
+        angle_deg: f64,
+        width: f64,
+        length: f64,
+        elongation: f64,
+    },
+    /// A D1388 cantilever's drape angle (degrees).
+    Bend {
+        angle_deg: f64,
+        width: f64,
+        overhang: f64,
+    },
+}
+
+/// One run of one model on one mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// `kl` or a triangle model's name.
+    pub model: &'static str,
+    /// "fitted", "converted" or "shell".
+    pub params: &'static str,
+    pub mesh: (usize, usize),
+    /// Median wall time, s.
+    pub seconds: f64,
+    pub value: f64,
+    /// |value − reference| / |reference|.
+    pub error: f64,
+}
+
+/// Every run and the reference they are measured against.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    pub test: LabTest,
+    pub reference: f64,
+    /// How the reference was found.
+    pub reference_from: String,
+    pub runs: Vec<Run>,
+    /// Runs that failed, one line each.
+    pub failures: Vec<String>,
+}
+
+impl Comparison {
+    /// The cheapest run whose error is at most `tol`.
+    pub fn cheapest_within(&self, tol: f64) -> Option<&Run> {
+        self.runs
+            .iter()
+            .filter(|r| r.error <= tol)
+            .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+    }
+}
+
+/// Median time of `repeats` runs of `f` and its value (None when a run fails).
+fn timed(repeats: usize, mut f: impl FnMut() -> Result<f64, String>) -> Result<(f64, f64), String> {
+    let mut times = Vec::new();
+    let mut value = 0.0;
+    for _ in 0..repeats.max(1) {
+        let t = Instant::now();
+        value = f()?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((times[times.len() / 2], value))
+}
+
+impl LabTest {
+    /// The shell's mesh ladder for this test: three meshes, each twice as fine.
+    pub fn meshes(&self) -> Vec<(usize, usize)> {
+        let base = match *self {
+            LabTest::Tensile { .. } => (8, 12),
+            LabTest::Bend {
+                width,
+                overhang,
+                angle_deg,
+            } => CantileverBend::new(width, overhang, angle_deg).mesh,
+        };
+        (0..3).map(|k| (base.0 << k, base.1 << k)).collect()
+    }
+
+    fn run_shell(&self, m: &FabricMaterial, mesh: (usize, usize)) -> Result<f64, String> {
+        match *self {
+            LabTest::Tensile {
+                angle_deg,
+                width,
+                length,
+                elongation,
+            } => {
+                let mut s = TensileStrip::new(width, length, angle_deg);
+                s.mesh = mesh;
+                let p = s.run(m, &[elongation]).map_err(|e| e.to_string())?;
+                Ok(p[0].force)
+            }
+            LabTest::Bend {
+                angle_deg,
+                width,
+                overhang,
+            } => {
+                let mut b = CantileverBend::new(width, overhang, angle_deg);
+                b.mesh = mesh;
+                Ok(b.run(m).map_err(|e| e.to_string())?.drape_angle_deg)
+            }
+        }
+    }
+
+    fn run_tri(&self, t: &TriMaterial, mesh: (usize, usize)) -> Result<f64, String> {
+        match *self {
+            LabTest::Tensile {
+                angle_deg,
+                width,
+                length,
+                elongation,
+            } => {
+                let mut s = TriTensile::new(width, length, angle_deg);
+                s.mesh = mesh;
+                let p = s.run(t, &[elongation]).map_err(|e| e.to_string())?;
+                Ok(p[0].force)
+            }
+            LabTest::Bend {
+                angle_deg,
+                width,
+                overhang,
+            } => {
+                let mut c = TriCantilever::new(width, overhang, angle_deg);
+                c.mesh = mesh;
+                Ok(c.run(t).map_err(|e| e.to_string())?.drape_angle_deg)
+            }
+        }
+    }
+
+    fn width(&self) -> f64 {
+        match *self {
+            LabTest::Tensile { width, .. } | LabTest::Bend { width, .. } => width,
+        }
+    }
+}
+
+/// Runs `test` with the shell material `shell` and with every triangle model (its `fitted`
+/// parameters where given, else converted), each on the test's three meshes, `repeats` times.
+pub fn compare(
+    shell: &FabricMaterial,
+    fitted: &[TriMaterial],
+    test: LabTest,
+    repeats: usize,
+    progress: &mut dyn FnMut(&str),
+) -> Comparison {
+    let meshes = test.meshes();
+    let mut raw: Vec<(&'static str, &'static str, (usize, usize), f64, f64)> = Vec::new();
+    let mut failures = Vec::new();
+    for &mesh in &meshes {
+        match timed(repeats, || test.run_shell(shell, mesh)) {
+            Ok((t, v)) => raw.push(("kl", "shell", mesh, t, v)),
+            Err(e) => failures.push(format!("kl on {}x{}: {e}", mesh.0, mesh.1)),
+        }
+        progress(&format!("kl on {}x{}", mesh.0, mesh.1));
+    }
+    for (name, kind) in TriKind::ALL {
+        let given = fitted.iter().find(|t| t.kind == kind);
+        for &mesh in &meshes {
+            let params = match given {
+                Some(t) => Ok((t.clone(), "fitted")),
+                None => TriMaterial::equivalent(
+                    kind,
+                    shell,
+                    test.width() / mesh.0 as f64,
+                    SPRING_CURVATURE,
+                )
+                .map(|t| (t, "converted")),
+            };
+            let r = params.and_then(|(t, how)| {
+                timed(repeats, || test.run_tri(&t, mesh)).map(|(s, v)| (s, v, how))
+            });
+            match r {
+                Ok((t, v, how)) => raw.push((name, how, mesh, t, v)),
+                Err(e) => failures.push(format!("{name} on {}x{}: {e}", mesh.0, mesh.1)),
+            }
+            progress(&format!("{name} on {}x{}", mesh.0, mesh.1));
+        }
+    }
+    let shell_levels: Vec<Level> = raw
+        .iter()
+        .filter(|r| r.0 == "kl")
+        .map(|r| Level {
+            mesh: r.2,
+            dofs: 0,
+            seconds: r.3,
+            qoi: r.4,
+            diff_to_next: None,
+            est_error: None,
+            order: None,
+        })
+        .collect();
+    let finest = shell_levels.last().map(|l| (l.qoi, l.mesh));
+    let study = analyse(shell_levels);
+    let (reference, reference_from) = match (study.extrapolated, finest) {
+        (Some(v), _) => (
+            v,
+            "the shell's Richardson extrapolation over its three meshes".to_string(),
+        ),
+        (None, Some((v, m))) => (
+            v,
+            format!(
+                "the shell on {}x{} (its ladder does not converge monotonically: no extrapolation)",
+                m.0, m.1
+            ),
+        ),
+        (None, None) => (f64::NAN, "none: the shell failed".to_string()),
+    };
+    let runs = raw
+        .into_iter()
+        .map(|(model, params, mesh, seconds, value)| Run {
+            model,
+            params,
+            mesh,
+            seconds,
+            value,
+            error: (value - reference).abs() / reference.abs(),
+        })
+        .collect();
+    Comparison {
+        test,
+        reference,
+        reference_from,
+        runs,
+        failures,
+    }
+}
