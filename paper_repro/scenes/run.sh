@@ -5,7 +5,8 @@
 # (shape.obj, shape.ply, CSV, scene.toml, scene.png) under out/, the table results.md and one
 # figure per scene with the five fabrics side by side at one scale (drape.png, picture-frame.png,
 # corner-pull.png; GPU renders, a software driver will do).
-# KS_FIT=path uses that binary instead of building one.
+# KS_FIT=path uses that binary instead of building one; `run.sh --figures` only redraws the figures
+# from the shapes already in out/.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 if [ -z "${KS_FIT:-}" ]; then
@@ -14,6 +15,7 @@ if [ -z "${KS_FIT:-}" ]; then
 fi
 here=paper_repro/scenes
 mkdir -p "$here/out"
+if [ "${1:-}" != --figures ]; then
 table="$here/results.md"
 {
   echo "# Showcase scenes on the bundled fits"
@@ -49,10 +51,14 @@ for fabric in canvas cotton silk denim wool; do
   done
 done
 cat "$table"
+fi
 # the figures: Clyde et al. 2017 Figure 1 (drapes) and Figure 5 (frame, corner pull) layouts
 for scene in drape picture-frame corner-pull; do
-  size=480x400; [ "$scene" = drape ] && size=480x600
+  # the flat squares from above without a ground (the corner pulls buckle tall enough that the
+  # automatic choice would take them for hanging shapes)
+  look=(--image 480x400 --view above --ground off)
+  [ "$scene" = drape ] && look=(--image 480x600)
   shapes=()
   for fabric in canvas cotton silk denim wool; do shapes+=("$here/out/$fabric-$scene/shape.obj"); done
-  "$KS_FIT" --force render "${shapes[@]}" --out "$here/$scene.png" --image "$size"
+  "$KS_FIT" --force render "${shapes[@]}" --out "$here/$scene.png" "${look[@]}"
 done
