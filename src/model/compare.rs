@@ -160,11 +160,18 @@ pub fn compare(
     progress: &mut dyn FnMut(&str),
 ) -> Comparison {
     let meshes = test.meshes();
-    let mut raw: Vec<(&'static str, &'static str, (usize, usize), f64, f64)> = Vec::new();
+    let mut raw: Vec<Run> = Vec::new();
     let mut failures = Vec::new();
     for &mesh in &meshes {
         match timed(repeats, || test.run_shell(shell, mesh)) {
-            Ok((t, v)) => raw.push(("kl", "shell", mesh, t, v)),
+            Ok((seconds, value)) => raw.push(Run {
+                model: "kl",
+                params: "shell",
+                mesh,
+                seconds,
+                value,
+                error: f64::NAN,
+            }),
             Err(e) => failures.push(format!("kl on {}x{}: {e}", mesh.0, mesh.1)),
         }
         progress(&format!("kl on {}x{}", mesh.0, mesh.1));
@@ -186,7 +193,14 @@ pub fn compare(
                 timed(repeats, || test.run_tri(&t, mesh)).map(|(s, v)| (s, v, how))
             });
             match r {
-                Ok((t, v, how)) => raw.push((name, how, mesh, t, v)),
+                Ok((seconds, value, params)) => raw.push(Run {
+                    model: name,
+                    params,
+                    mesh,
+                    seconds,
+                    value,
+                    error: f64::NAN,
+                }),
                 Err(e) => failures.push(format!("{name} on {}x{}: {e}", mesh.0, mesh.1)),
             }
             progress(&format!("{name} on {}x{}", mesh.0, mesh.1));
@@ -194,12 +208,12 @@ pub fn compare(
     }
     let shell_levels: Vec<Level> = raw
         .iter()
-        .filter(|r| r.0 == "kl")
+        .filter(|r| r.model == "kl")
         .map(|r| Level {
-            mesh: r.2,
+            mesh: r.mesh,
             dofs: 0,
-            seconds: r.3,
-            qoi: r.4,
+            seconds: r.seconds,
+            qoi: r.value,
             diff_to_next: None,
             est_error: None,
             order: None,
@@ -223,13 +237,9 @@ pub fn compare(
     };
     let runs = raw
         .into_iter()
-        .map(|(model, params, mesh, seconds, value)| Run {
-            model,
-            params,
-            mesh,
-            seconds,
-            value,
-            error: (value - reference).abs() / reference.abs(),
+        .map(|r| Run {
+            error: (r.value - reference).abs() / reference.abs(),
+            ..r
         })
         .collect();
     Comparison {

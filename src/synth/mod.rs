@@ -449,7 +449,7 @@ mod tests {
 
     fn cotton() -> FabricMaterial {
         crate::material::parse_material(
-            include_str!("../examples/materials/cotton.toml"),
+            include_str!("../../examples/materials/cotton.toml"),
             "cotton.toml",
         )
         .unwrap()
@@ -464,7 +464,9 @@ mod tests {
             mesh: (2, 3),
             ..SynthOptions::default()
         };
-        let run = |o: &SynthOptions| synth_tensile(&m, o, Instant::now(), &mut |_| {}).unwrap();
+        let run = |o: &SynthOptions| {
+            synth_tensile(&LabModel::Shell(m.clone()), o, Instant::now(), &mut |_| {}).unwrap()
+        };
         let exact = run(&opts);
         assert_eq!(exact.len(), 10);
         let names: Vec<String> = exact
@@ -479,7 +481,7 @@ mod tests {
             names[6..],
             ["a22.5-1.csv", "a22.5-2.csv", "a67.5-1.csv", "a67.5-2.csv"]
         );
-        let mut strip = TensileStrip::new(0.05, 0.075, 90.0);
+        let mut strip = crate::scene::TensileStrip::new(0.05, 0.075, 90.0);
         strip.mesh = (2, 3);
         strip.grading = opts.grading;
         let direct: Vec<f64> = strip
