@@ -7,8 +7,8 @@
 //! The page is polyglot markup (well-formed XML as well as HTML5) and references nothing
 //! outside itself: no scripts, no style sheets, no fonts, no images by address.
 
-use super::report::{angle_svg, table};
-use super::{FitResult, TestOutcome};
+use super::report::{angle_svg, curve_angles, curves_at, table};
+use super::FitResult;
 use crate::material::material_toml;
 use std::fmt::Write;
 
@@ -219,14 +219,7 @@ fn tests_section(h: &mut String, r: &FitResult) {
 }
 
 fn curves_section(h: &mut String, r: &FitResult) {
-    let mut angles: Vec<f64> = r
-        .tests
-        .iter()
-        .filter(|t| !t.points.is_empty())
-        .map(|t| t.angle_deg)
-        .collect();
-    angles.sort_by(f64::total_cmp);
-    angles.dedup();
+    let angles = curve_angles(r);
     if angles.is_empty() {
         return;
     }
@@ -235,11 +228,7 @@ fn curves_section(h: &mut String, r: &FitResult) {
         "<h2>Measured curves and the fit</h2>\n<p>Every repeat measured (dashed) against the fitted model (solid), one plot per cut angle.</p>"
     );
     for a in angles {
-        let at: Vec<&TestOutcome> = r
-            .tests
-            .iter()
-            .filter(|t| t.angle_deg == a && !t.points.is_empty())
-            .collect();
+        let at = curves_at(r, a);
         let fitted = at.iter().any(|t| t.used_in_fit);
         let title = format!(
             "{a}°: {} repeat(s), {}",
@@ -333,6 +322,47 @@ mod tests {
         ] {
             assert_eq!(base64(i.as_bytes()), o);
         }
+    }
+
+    /// A fit with no tests and one figure: the figure is inline as a data URL, text is escaped,
+    /// and the page holds nothing that loads from elsewhere.
+    #[test]
+    fn figures_are_inline_and_text_is_escaped() {
+        let material = crate::material::file::parse_material(
+            include_str!("../../examples/materials/cotton.toml"),
+            "cotton.toml",
+        )
+        .unwrap();
+        let r = FitResult {
+            material,
+            method: "hybrid".into(),
+            meshes: vec![(8, 12)],
+            stats: Default::default(),
+            degree_log: vec!["warp: degree 1 <kept>".into()],
+            notes: Vec::new(),
+            identifiability: Vec::new(),
+            uncertainty: Vec::new(),
+            tests: Vec::new(),
+            max_error: 0.1,
+            mesh_check: None,
+        };
+        let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
+        let fig = Figure {
+            title: "drape".into(),
+            caption: "a & b".into(),
+            png: png.clone(),
+        };
+        let page = fit_html(&r, "data/fabric.toml", &[fig]);
+        assert!(page.contains(&format!("src=\"data:image/png;base64,{}\"", base64(&png))));
+        assert!(page.contains("warp: degree 1 &lt;kept&gt;"));
+        assert!(page.contains("a &amp; b"));
+        assert!(page.contains("--max-error 10 %"));
+        assert!(!page.contains("<script") && !page.contains("<link"));
+        // the only addresses are XML namespace names, which nothing loads
+        assert_eq!(
+            page.matches("http").count(),
+            page.matches("xmlns=\"http").count()
+        );
     }
 
     #[test]

@@ -443,6 +443,27 @@ pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> 
     Ok(buf)
 }
 
+/// The cut angles that have measured curves, ascending.
+pub(super) fn curve_angles(r: &FitResult) -> Vec<f64> {
+    let mut angles: Vec<f64> = r
+        .tests
+        .iter()
+        .filter(|t| !t.points.is_empty())
+        .map(|t| t.angle_deg)
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    angles.dedup();
+    angles
+}
+
+/// The tests with measured curves at cut angle `a`.
+pub(super) fn curves_at(r: &FitResult, a: f64) -> Vec<&TestOutcome> {
+    r.tests
+        .iter()
+        .filter(|t| t.angle_deg == a && !t.points.is_empty())
+        .collect()
+}
+
 /// Writes `DIR/<kind>-<curve>.csv` and `.svg` for every tensile and validation test, and
 /// `DIR/summary.txt` with the table. Returns the files written.
 pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec<String>> {
@@ -469,20 +490,8 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         }
     }
     // one plot per angle with every repeat and their scatter band
-    let mut angles: Vec<f64> = r
-        .tests
-        .iter()
-        .filter(|t| !t.points.is_empty())
-        .map(|t| t.angle_deg)
-        .collect();
-    angles.sort_by(f64::total_cmp);
-    angles.dedup();
-    for a in angles {
-        let at: Vec<&TestOutcome> = r
-            .tests
-            .iter()
-            .filter(|t| t.angle_deg == a && !t.points.is_empty())
-            .collect();
+    for a in curve_angles(r) {
+        let at = curves_at(r, a);
         let title = format!("{a}°: {} repeat(s), fit solid", at.len());
         if let Ok(svg) = angle_svg(&at, &title) {
             let path = dir.join(format!("angle-{a}.svg"));
