@@ -150,6 +150,64 @@ pub fn analyse(mut levels: Vec<Level>) -> Study {
     }
 }
 
+/// Differences below this fraction of a point's value are round-off: three levels that agree
+/// to it are converged (a homogeneous strip gives the same force on every mesh).
+pub const ROUND_OFF: f64 = 1e-9;
+
+/// Points whose converged value is below this fraction of the curve's largest are left out
+/// of a curve's error (a relative error of a force near zero says nothing of the curve).
+pub const CURVE_FLOOR: f64 = 0.05;
+
+/// Estimated relative error of each of several curves of the same points (coarse to fine,
+/// each level twice as fine as the last): at each point the limit q∞ is extrapolated from
+/// the three finest levels as in [`analyse`], but only from a monotone triple (an
+/// oscillating one would make the estimate optimistic), or taken as the finest value where
+/// the three agree to [`ROUND_OFF`]. A level's error is the largest |q − q∞| / |q∞| over the
+/// points at or above [`CURVE_FLOOR`] of the largest |q∞|; `None` for every level when some
+/// such point has no estimate, or when there are fewer than three levels.
+pub fn curve_errors(curves: &[Vec<f64>]) -> Vec<Option<f64>> {
+    let n = curves.len();
+    let none = vec![None; n];
+    if n < 3 || curves.iter().any(|c| c.len() != curves[0].len()) {
+        return none;
+    }
+    let (c0, c1, c2) = (&curves[n - 3], &curves[n - 2], &curves[n - 1]);
+    let mut limit = Vec::with_capacity(c2.len());
+    for ((&q0, &q1), &q2) in c0.iter().zip(c1).zip(c2) {
+        let (d0, d1) = (q1 - q0, q2 - q1);
+        let scale = q0.abs().max(q1.abs()).max(q2.abs());
+        limit.push(if d0.abs().max(d1.abs()) <= ROUND_OFF * scale {
+            Some(q2)
+        } else if d1 == 0.0 {
+            Some(q2)
+        } else if d0 * d1 > 0.0 && d1.abs() < d0.abs() {
+            let p = (d0 / d1).log2();
+            Some(q2 + d1 / (p.exp2() - 1.0))
+        } else {
+            None
+        });
+    }
+    let top = limit.iter().flatten().fold(0.0f64, |m, q| m.max(q.abs()));
+    let mut errors = vec![Some(0.0f64); n];
+    for (k, q) in limit.iter().enumerate() {
+        let counts = match q {
+            Some(q) => q.abs() >= CURVE_FLOOR * top && *q != 0.0,
+            None => c2[k].abs() >= CURVE_FLOOR * top,
+        };
+        if !counts {
+            continue;
+        }
+        let Some(q) = q else { return none };
+        for (e, c) in errors.iter_mut().zip(curves) {
+            *e = e.map(|e| e.max(((c[k] - q) / q).abs()));
+        }
+    }
+    if top == 0.0 {
+        return none;
+    }
+    errors
+}
+
 impl Study {
     /// The coarsest level whose estimated relative error is below `tol`.
     pub fn pick(&self, tol: f64) -> Option<&Level> {
@@ -275,6 +333,42 @@ impl Study {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn curve_errors_extrapolate_each_point_and_refuse_oscillation() {
+        // q_k(x) = x (1 + 0.4 h²), h = 1/2^k: order 2 at every point, limit x
+        let xs = [0.0, 0.01, 1.0, 2.0];
+        let curve = |k: i32| -> Vec<f64> {
+            let h = 0.5f64.powi(k);
+            xs.iter().map(|x| x * (1.0 + 0.4 * h * h)).collect()
+        };
+        let e = curve_errors(&[curve(0), curve(1), curve(2), curve(3)]);
+        for (k, e) in e.iter().enumerate() {
+            let want = 0.4 * 0.25f64.powi(k as i32);
+            assert!(
+                (e.unwrap() - want).abs() < 1e-12 * want.max(1.0),
+                "{k}: {e:?}"
+            );
+        }
+        // a homogeneous strip: the same value to round-off on every mesh is converged
+        let flat = vec![
+            vec![1.0, 2.0],
+            vec![1.0, 2.0 + 1e-12],
+            vec![1.0 + 1e-13, 2.0],
+        ];
+        assert!(curve_errors(&flat).iter().all(|e| e.unwrap() < 1e-11));
+        // an oscillating point above the floor gives no estimate at all
+        let mut osc = vec![curve(0), curve(1), curve(2)];
+        osc[1][3] = 1.9;
+        assert!(curve_errors(&osc).iter().all(|e| e.is_none()));
+        // below the floor it is left out
+        let mut low = vec![curve(0), curve(1), curve(2)];
+        low[1][1] = 0.02;
+        assert!(curve_errors(&low).iter().all(|e| e.is_some()));
+        assert!(curve_errors(&[curve(0), curve(1)])
+            .iter()
+            .all(|e| e.is_none()));
+    }
 
     #[test]
     fn recovers_order_and_limit_of_a_known_sequence() {

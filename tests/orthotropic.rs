@@ -78,7 +78,9 @@ fn stiffening_bias_strip_reaches_30_percent_with_rising_force() {
             "--width",
             "50",
         ])
-        .args(["--length", "75", "--to", "22.5", "--steps", "6"])
+        .args([
+            "--length", "75", "--to", "22.5", "--steps", "6", "--mesh", "8x12",
+        ])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);

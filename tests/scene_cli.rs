@@ -302,3 +302,89 @@ fn a_frame_past_the_materials_shear_cut_off_is_warned_about() {
     assert!(run("30").contains("past the material's shear cut-off 0.100"));
     assert!(!run("10").contains("warning"));
 }
+
+/// The last force of `ks-fit tensile` on the example cotton, 50 × 75 mm pulled 3.75 mm in one
+/// step, with `extra` flags; with stderr.
+fn strip_force(angle: &str, extra: &[&str]) -> (f64, String) {
+    let mut args = vec![
+        "tensile",
+        "--material",
+        COTTON,
+        "--angle",
+        angle,
+        "--width",
+        "50",
+        "--length",
+        "75",
+        "--to",
+        "3.75",
+        "--steps",
+        "1",
+    ];
+    args.extend_from_slice(extra);
+    let (rc, out, err) = ks_fit(&args);
+    assert_eq!(rc, 0, "{err}");
+    let force = out.lines().nth(1).unwrap().split(',').nth(1).unwrap();
+    (force.parse().unwrap(), err)
+}
+
+#[test]
+fn tensile_picks_a_mesh_whose_force_is_within_the_tolerance() {
+    // a warp strip is nearly homogeneous: the first mesh of the ladder passes
+    let (_, err) = strip_force("90", &[]);
+    assert!(
+        err.contains("mesh 4x6 (grading 0.8,0.8) chosen from 4x6")
+            && err.contains("< --tol 0.300 %"),
+        "{err}"
+    );
+    // a bias strip has singular clamped corners and needs a finer mesh; the reference is a
+    // mesh twice as fine as the finest of the ladder (graded cages converge at order ≈ 2 here,
+    // measured in `TensileStrip`'s grading note, so it is within about 0.05 % of the limit)
+    let (auto, err) = strip_force("45", &[]);
+    let chosen = err
+        .split("mesh ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    assert!(chosen != "4x6" && chosen != "8x12", "{err}");
+    let (reference, _) = strip_force("45", &["--mesh", "64x96", "--grading", "0.8,0.8"]);
+    assert!(
+        (auto / reference - 1.0).abs() < 0.003,
+        "auto {auto} N on {chosen} against {reference} N on 64x96 ({err})"
+    );
+    // the first mesh alone misses by far more than the tolerance
+    let (coarse, err) = strip_force("45", &["--mesh", "4x6", "--grading", "0.8,0.8"]);
+    assert!((coarse / reference - 1.0).abs() > 0.05, "{coarse} N");
+    assert!(!err.contains("chosen"), "--mesh forces one: {err}");
+    // a tighter tolerance moves up the ladder, and the grading asked for is kept
+    let (_, err) = strip_force("90", &["--tol", "0.0001"]);
+    assert!(!err.contains("mesh 4x6 (grading"), "{err}");
+    let (_, err) = strip_force("90", &["--grading", "0,0"]);
+    assert!(err.contains("(grading 0,0)"), "{err}");
+    for bad in ["0", "1", "-0.1", "nan"] {
+        let (rc, _, err) = ks_fit(&[
+            "tensile",
+            "--material",
+            COTTON,
+            "--angle",
+            "0",
+            "--width",
+            "50",
+            "--length",
+            "75",
+            "--to",
+            "1",
+            "--steps",
+            "1",
+            "--tol",
+            bad,
+        ]);
+        assert_eq!(rc, 2, "--tol {bad}: {err}");
+        assert!(
+            err.contains("--tol must be a relative force error"),
+            "{err}"
+        );
+    }
+}

@@ -2,6 +2,7 @@
 //!
 //! Every user error is one line on stderr starting with `ks-fit: error:` and exit code 2.
 
+mod auto;
 mod export;
 mod fabric;
 mod guard;

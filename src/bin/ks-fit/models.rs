@@ -2,7 +2,8 @@
 //! the same output as the shell's, with the parameters from the material file's `[model]`
 //! table or from the shell law's zero-strain moduli (said on stderr).
 
-use crate::scene::{auto_bend, describe, unstable_error, SceneArgs};
+use crate::auto::auto_bend;
+use crate::scene::{describe, unstable_error, SceneArgs};
 use kshell::tri::file::{load_tri, TriSource};
 use kshell::tri::{TriCantilever, TriKind, TriTensile};
 use std::path::Path;

@@ -15,24 +15,26 @@ use std::time::Instant;
 /// Options shared by the scene commands.
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Faces across × along, e.g. 8x12 (default: the scene's own: 8 across for a strip; for
-    /// a cantilever the automatic choice, see --tol).
+    /// Faces across × along, e.g. 8x12 (default: the automatic choice, see --tol; a
+    /// triangle model's strip keeps its own fixed mesh).
     #[arg(long, value_parser = parse_mesh)]
     pub mesh: Option<(usize, usize)>,
     /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
     /// ghost for cantilevers, as measured in the README).
     #[arg(long)]
-    boundary: Option<BoundaryRule>,
+    pub boundary: Option<BoundaryRule>,
     /// Strip cage grading towards the free edges and the jaws, "across,along", each in [0, 1)
-    /// (tensile strips; default 0: uniform; 0.8,0.8 makes a bias strip's force 4–6 times more
-    /// accurate on the same mesh).
+    /// (tensile strips; default 0.8,0.8 on the automatic mesh, 0 (uniform) with --mesh;
+    /// 0.8,0.8 makes a bias strip's force 4–6 times more accurate on the same mesh).
     #[arg(long, value_parser = crate::parse_grading)]
-    grading: Option<kshell::mesh::Grading>,
-    /// Cantilevers without --mesh: the drape-angle error (degrees) the automatic mesh must
-    /// meet. Three meshes are solved (elements of about 6.25 mm, then twice and four times as
-    /// fine), each one's error estimated by Richardson, and the coarsest within it kept.
-    #[arg(long, default_value_t = 0.05)]
-    tol: f64,
+    pub grading: Option<kshell::mesh::Grading>,
+    /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape
+    /// angle (default 0.05; three meshes of elements about 6.25 mm, then twice and four times
+    /// as fine), for `tensile` the relative force error over the curve (default 0.003, i.e.
+    /// 0.3 %; graded cages from 4 faces across, doubled until one passes). Each mesh's error
+    /// is estimated by Richardson extrapolation and the coarsest within it kept.
+    #[arg(long, allow_negative_numbers = true)]
+    pub tol: Option<f64>,
     /// Report each solve on stderr.
     #[arg(short, long)]
     pub verbose: bool,
@@ -230,20 +232,34 @@ pub fn cmd_tensile(
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let mut strip = TensileStrip::new(w, l, angle);
     strip.grading = args.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
-    if let Some(m) = args.mesh {
-        strip.mesh = m;
-    }
     if let Some(b) = args.boundary {
         strip.boundary = b;
     }
     strip.solver = args.solver();
-    // the mesh, and every step's equilibrium the strip keeps (3 doubles a node), within limits
-    let (nx, ny) = strip.mesh;
-    let kept = steps.saturating_mul((nx + 3) * (ny + 3) * 24) / kshell::limits::BYTES_PER_FACE;
-    kshell::limits::check_faces(
-        &format!("--mesh {nx}x{ny} with {steps} steps"),
-        nx.saturating_mul(ny).saturating_add(kept),
-    )?;
+    let Some(m) = args.mesh else {
+        crate::auto::tensile_tol(args)?;
+        let points = crate::auto::auto_tensile(&strip, &mat, &dl, args)?;
+        println!("elongation_mm,force_n");
+        for p in &points {
+            println!(
+                "{},{}",
+                kshell::io::num(p.elongation * 1e3),
+                kshell::io::num(p.force)
+            );
+        }
+        let saddles: Vec<String> = points
+            .iter()
+            .filter(|p| !p.report.stable)
+            .map(|p| kshell::io::num(p.elongation * 1e3))
+            .collect();
+        return unstable_error(
+            "the strip's equilibrium",
+            &saddles,
+            "at elongation(s) {} mm",
+        );
+    };
+    strip.mesh = m;
+    check_strip_size("--mesh", strip.mesh, steps)?;
     let mut rig = strip.rig(&mat, &dl).map_err(|e| e.to_string())?;
     println!("elongation_mm,force_n");
     let (start, mut shown) = (Instant::now(), 0.0);
@@ -280,6 +296,17 @@ pub fn cmd_tensile(
         "the strip's equilibrium",
         &saddles,
         "at elongation(s) {} mm",
+    )
+}
+
+/// The mesh, and every step's equilibrium the strip keeps (3 doubles a node), within
+/// [`kshell::limits`]; `what` names the mesh's origin in the message.
+pub fn check_strip_size(what: &str, (nx, ny): (usize, usize), steps: usize) -> Result<(), String> {
+    let nodes = nx.saturating_add(3).saturating_mul(ny.saturating_add(3));
+    let kept = steps.saturating_mul(nodes.saturating_mul(24)) / kshell::limits::BYTES_PER_FACE;
+    kshell::limits::check_faces(
+        &format!("{what} {nx}x{ny} with {steps} steps"),
+        nx.saturating_mul(ny).saturating_add(kept),
     )
 }
 
@@ -321,7 +348,7 @@ pub fn cmd_bend(
     bend.solver = args.solver();
     let r = match args.mesh {
         Some(_) => bend.run(&mat).map_err(|e| e.to_string())?,
-        None => auto_bend(bend.mesh, args, |mesh| {
+        None => crate::auto::auto_bend(bend.mesh, args, |mesh| {
             CantileverBend {
                 mesh,
                 ..bend.clone()
@@ -346,85 +373,6 @@ pub fn cmd_bend(
         vec![kshell::io::num(overhang)]
     };
     unstable_error("the cantilever's equilibrium", &saddle, "at overhang {} mm")
-}
-
-/// The cantilever on three meshes (the default, then twice and four times as fine each way),
-/// keeping the coarsest whose Richardson estimate of the drape-angle error is below `--tol`
-/// degrees (the finest, with a warning, where none is or there is no estimate).
-pub fn auto_bend(
-    base: (usize, usize),
-    args: &SceneArgs,
-    run: impl Fn((usize, usize)) -> Result<kshell::scene::BendResult, String>,
-) -> Result<kshell::scene::BendResult, String> {
-    if !(args.tol.is_finite() && args.tol > 0.0) {
-        return Err(format!(
-            "--tol must be a positive number of degrees, got {}",
-            args.tol
-        ));
-    }
-    let (nx, ny) = base;
-    let mut runs = Vec::new();
-    for k in 0..3 {
-        let mesh = (nx << k, ny << k);
-        kshell::limits::check_mesh(&format!("mesh {}x{}", mesh.0, mesh.1), mesh.0, mesh.1)?;
-        let t0 = Instant::now();
-        let r = run(mesh)?;
-        if args.verbose {
-            eprintln!(
-                "ks-fit: bend: {}x{}: {:.6}° ({:.2} s)",
-                mesh.0,
-                mesh.1,
-                r.drape_angle_deg,
-                t0.elapsed().as_secs_f64()
-            );
-        }
-        runs.push((mesh, r, t0.elapsed().as_secs_f64()));
-    }
-    let levels = runs
-        .iter()
-        .map(|(mesh, r, secs)| kshell::converge::Level {
-            mesh: *mesh,
-            dofs: 0,
-            seconds: *secs,
-            qoi: r.drape_angle_deg,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        })
-        .collect();
-    let study = kshell::converge::analyse(levels);
-    let errors: Vec<Option<f64>> = match study.extrapolated {
-        Some(q) => runs
-            .iter()
-            .map(|(_, r, _)| Some((r.drape_angle_deg - q).abs()))
-            .collect(),
-        None => vec![None; 3],
-    };
-    let pick = errors.iter().position(|e| e.is_some_and(|e| e < args.tol));
-    let i = pick.unwrap_or(2);
-    let (mesh, _, _) = runs[i];
-    let said = match (pick, errors[i]) {
-        (Some(_), Some(e)) => format!("estimated error {e:.3}° < --tol {}°", args.tol),
-        (None, Some(e)) => format!(
-            "WARNING: no mesh meets --tol {}°; the finest, estimated error {e:.3}°",
-            args.tol
-        ),
-        _ => {
-            "WARNING: the three angles do not converge monotonically, no error estimate; the finest"
-                .into()
-        }
-    };
-    let all: Vec<String> = runs
-        .iter()
-        .map(|(m, r, _)| format!("{}x{} {:.4}°", m.0, m.1, r.drape_angle_deg))
-        .collect();
-    eprintln!(
-        "ks-fit: bend: mesh {}x{} chosen from {} ({said})",
-        mesh.0,
-        mesh.1,
-        all.join(", ")
-    );
-    Ok(runs.swap_remove(i).1)
 }
 
 pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {

@@ -1,0 +1,224 @@
+//! The automatic mesh of the lab commands (`bend` and `tensile` without `--mesh`): a short
+//! ladder of meshes, each twice as fine as the last, each one's error estimated by Richardson
+//! extrapolation (`kshell::converge`), and the coarsest within `--tol` kept. The choice and
+//! the values it was made from are said on stderr; where no mesh passes, or the values do not
+//! converge monotonically, the finest is kept with a WARNING.
+
+use crate::scene::{describe, SceneArgs};
+use kshell::material::FabricMaterial;
+use kshell::scene::{TensilePoint, TensileStrip, STRIP_GRADING};
+use std::time::Instant;
+
+/// `bend`'s default tolerance, degrees of drape angle.
+pub const BEND_TOL_DEG: f64 = 0.05;
+/// `tensile`'s default tolerance, relative force error.
+pub const TENSILE_TOL: f64 = 0.003;
+/// Most meshes of the strip ladder (4, 8, 16, 32, 64 faces across for a 50 × 75 mm strip).
+pub const TENSILE_LEVELS: usize = 5;
+/// The strip ladder stops growing before a mesh of more faces than this.
+pub const TENSILE_MAX_FACES: usize = 20_000;
+
+/// `--tol` for `bend`: a positive number of degrees.
+fn bend_tol(args: &SceneArgs) -> Result<f64, String> {
+    let tol = args.tol.unwrap_or(BEND_TOL_DEG);
+    if tol.is_finite() && tol > 0.0 {
+        Ok(tol)
+    } else {
+        Err(format!(
+            "--tol must be a positive number of degrees, got {tol}"
+        ))
+    }
+}
+
+/// `--tol` for `tensile`: a relative error in (0, 1).
+pub fn tensile_tol(args: &SceneArgs) -> Result<f64, String> {
+    let tol = args.tol.unwrap_or(TENSILE_TOL);
+    if tol.is_finite() && tol > 0.0 && tol < 1.0 {
+        Ok(tol)
+    } else {
+        Err(format!(
+            "--tol must be a relative force error in (0, 1) (0.003 is 0.3 %), got {tol}"
+        ))
+    }
+}
+
+/// The cantilever on three meshes (the default, then twice and four times as fine each way),
+/// keeping the coarsest whose Richardson estimate of the drape-angle error is below `--tol`
+/// degrees (the finest, with a warning, where none is or there is no estimate).
+pub fn auto_bend(
+    base: (usize, usize),
+    args: &SceneArgs,
+    run: impl Fn((usize, usize)) -> Result<kshell::scene::BendResult, String>,
+) -> Result<kshell::scene::BendResult, String> {
+    let tol = bend_tol(args)?;
+    let (nx, ny) = base;
+    let mut runs = Vec::new();
+    for k in 0..3 {
+        let mesh = (nx << k, ny << k);
+        kshell::limits::check_mesh(&format!("mesh {}x{}", mesh.0, mesh.1), mesh.0, mesh.1)?;
+        let t0 = Instant::now();
+        let r = run(mesh)?;
+        if args.verbose {
+            eprintln!(
+                "ks-fit: bend: {}x{}: {:.6}° ({:.2} s)",
+                mesh.0,
+                mesh.1,
+                r.drape_angle_deg,
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        runs.push((mesh, r, t0.elapsed().as_secs_f64()));
+    }
+    let levels = runs
+        .iter()
+        .map(|(mesh, r, secs)| kshell::converge::Level {
+            mesh: *mesh,
+            dofs: 0,
+            seconds: *secs,
+            qoi: r.drape_angle_deg,
+            diff_to_next: None,
+            est_error: None,
+            order: None,
+        })
+        .collect();
+    let study = kshell::converge::analyse(levels);
+    let errors: Vec<Option<f64>> = match study.extrapolated {
+        Some(q) => runs
+            .iter()
+            .map(|(_, r, _)| Some((r.drape_angle_deg - q).abs()))
+            .collect(),
+        None => vec![None; 3],
+    };
+    let pick = errors.iter().position(|e| e.is_some_and(|e| e < tol));
+    let i = pick.unwrap_or(2);
+    let (mesh, _, _) = runs[i];
+    let said = match (pick, errors[i]) {
+        (Some(_), Some(e)) => format!("estimated error {e:.3}° < --tol {tol}°"),
+        (None, Some(e)) => format!(
+            "WARNING: no mesh meets --tol {}°; the finest, estimated error {e:.3}°",
+            tol
+        ),
+        _ => {
+            "WARNING: the three angles do not converge monotonically, no error estimate; the finest"
+                .into()
+        }
+    };
+    let all: Vec<String> = runs
+        .iter()
+        .map(|(m, r, _)| format!("{}x{} {:.4}°", m.0, m.1, r.drape_angle_deg))
+        .collect();
+    eprintln!(
+        "ks-fit: bend: mesh {}x{} chosen from {} ({said})",
+        mesh.0,
+        mesh.1,
+        all.join(", ")
+    );
+    Ok(runs.swap_remove(i).1)
+}
+
+/// The first mesh of the strip ladder: 4 faces across the shorter side, about square faces.
+pub fn tensile_base(width: f64, length: f64) -> (usize, usize) {
+    let ratio = |a: f64, b: f64| ((4.0 * a / b).round() as usize).max(1);
+    if length >= width {
+        (4, ratio(length, width))
+    } else {
+        (ratio(width, length), 4)
+    }
+}
+
+/// The strip's curve on a growing ladder of meshes (from [`tensile_base`], each twice as fine
+/// as the last, graded as [`STRIP_GRADING`] unless `--grading` says otherwise), stopping as
+/// soon as one mesh's estimated relative force error ([`kshell::converge::curve_errors`]) is
+/// below `tol`, after [`TENSILE_LEVELS`] meshes, or before one of over
+/// [`TENSILE_MAX_FACES`] faces. Returns the chosen mesh's points.
+pub fn auto_tensile(
+    strip: &TensileStrip,
+    material: &FabricMaterial,
+    elongations: &[f64],
+    args: &SceneArgs,
+) -> Result<Vec<TensilePoint>, String> {
+    let tol = tensile_tol(args)?;
+    let mut strip = strip.clone();
+    strip.grading = args.grading.unwrap_or(STRIP_GRADING);
+    let (nx, ny) = tensile_base(strip.width, strip.length);
+    let mut runs: Vec<((usize, usize), Vec<TensilePoint>)> = Vec::new();
+    let mut errors = Vec::new();
+    let mut stop = None;
+    for k in 0..TENSILE_LEVELS {
+        let mesh = (nx << k, ny << k);
+        if k >= 3 && mesh.0.saturating_mul(mesh.1) > TENSILE_MAX_FACES {
+            stop = Some(format!(
+                "the next mesh, {}x{}, is over {TENSILE_MAX_FACES} faces",
+                mesh.0, mesh.1
+            ));
+            break;
+        }
+        crate::scene::check_strip_size("the automatic mesh", mesh, elongations.len())?;
+        strip.mesh = mesh;
+        let t0 = Instant::now();
+        let points = strip
+            .run(material, elongations)
+            .map_err(|e| e.to_string())?;
+        if args.verbose {
+            let last = points.last().map_or(0.0, |p| p.force);
+            eprintln!(
+                "ks-fit: tensile: {}x{}: {last:.6} N at the last elongation ({:.2} s)",
+                mesh.0,
+                mesh.1,
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        runs.push((mesh, points));
+        let curves: Vec<Vec<f64>> = runs
+            .iter()
+            .map(|(_, p)| p.iter().map(|p| p.force).collect())
+            .collect();
+        errors = kshell::converge::curve_errors(&curves);
+        if errors.iter().any(|e| e.is_some_and(|e| e < tol)) {
+            break;
+        }
+    }
+    let pick = errors.iter().position(|e| e.is_some_and(|e| e < tol));
+    let i = pick.unwrap_or(runs.len() - 1);
+    let pct = |e: f64| format!("{:.3} %", 100.0 * e);
+    let said = match (pick, errors[i]) {
+        (Some(_), Some(e)) => format!("estimated error {} < --tol {}", pct(e), pct(tol)),
+        (None, Some(e)) => format!(
+            "WARNING: no mesh meets --tol {}{}; the finest, estimated error {}",
+            pct(tol),
+            stop.map(|s| format!(" ({s})")).unwrap_or_default(),
+            pct(e)
+        ),
+        _ => format!(
+            "WARNING: the forces do not converge monotonically, no error estimate{}; the finest",
+            stop.map(|s| format!(" ({s})")).unwrap_or_default()
+        ),
+    };
+    let all: Vec<String> = runs
+        .iter()
+        .map(|(m, p)| {
+            let f = p.last().map_or(0.0, |p| p.force);
+            format!("{}x{} {f:.4}", m.0, m.1)
+        })
+        .collect();
+    let (mesh, points) = runs.swap_remove(i);
+    let g = strip.grading;
+    eprintln!(
+        "ks-fit: tensile: mesh {}x{} (grading {},{}) chosen from {} N at the last elongation ({said})",
+        mesh.0,
+        mesh.1,
+        g.across,
+        g.along,
+        all.join(", ")
+    );
+    if args.verbose {
+        for p in &points {
+            eprintln!(
+                "elongation {:.4} mm: {}",
+                p.elongation * 1e3,
+                describe(&p.report)
+            );
+        }
+    }
+    Ok(points)
+}
