@@ -158,6 +158,23 @@ pub const ROUND_OFF: f64 = 1e-9;
 /// of a curve's error (a relative error of a force near zero says nothing of the curve).
 pub const CURVE_FLOOR: f64 = 0.05;
 
+/// Richardson's limit of three values, coarse to fine, each level twice as fine as the last:
+/// the finest where the three agree to [`ROUND_OFF`] (or the last two exactly), else only from
+/// a monotone, contracting triple (`None` for an oscillating or diverging one, whose estimate
+/// would be optimistic or meaningless).
+pub fn monotone_limit(q0: f64, q1: f64, q2: f64) -> Option<f64> {
+    let (d0, d1) = (q1 - q0, q2 - q1);
+    let scale = q0.abs().max(q1.abs()).max(q2.abs());
+    if d0.abs().max(d1.abs()) <= ROUND_OFF * scale || d1 == 0.0 {
+        Some(q2)
+    } else if d0 * d1 > 0.0 && d1.abs() < d0.abs() {
+        let p = (d0 / d1).log2();
+        Some(q2 + d1 / (p.exp2() - 1.0))
+    } else {
+        None
+    }
+}
+
 /// Estimated relative error of each of several curves of the same points (coarse to fine,
 /// each level twice as fine as the last): at each point the limit q∞ is extrapolated from
 /// the three finest levels as in [`analyse`], but only from a monotone triple (an
@@ -172,21 +189,12 @@ pub fn curve_errors(curves: &[Vec<f64>]) -> Vec<Option<f64>> {
         return none;
     }
     let (c0, c1, c2) = (&curves[n - 3], &curves[n - 2], &curves[n - 1]);
-    let mut limit = Vec::with_capacity(c2.len());
-    for ((&q0, &q1), &q2) in c0.iter().zip(c1).zip(c2) {
-        let (d0, d1) = (q1 - q0, q2 - q1);
-        let scale = q0.abs().max(q1.abs()).max(q2.abs());
-        limit.push(if d0.abs().max(d1.abs()) <= ROUND_OFF * scale {
-            Some(q2)
-        } else if d1 == 0.0 {
-            Some(q2)
-        } else if d0 * d1 > 0.0 && d1.abs() < d0.abs() {
-            let p = (d0 / d1).log2();
-            Some(q2 + d1 / (p.exp2() - 1.0))
-        } else {
-            None
-        });
-    }
+    let limit: Vec<Option<f64>> = c0
+        .iter()
+        .zip(c1)
+        .zip(c2)
+        .map(|((&q0, &q1), &q2)| monotone_limit(q0, q1, q2))
+        .collect();
     let top = limit.iter().flatten().fold(0.0f64, |m, q| m.max(q.abs()));
     let mut errors = vec![Some(0.0f64); n];
     for (k, q) in limit.iter().enumerate() {

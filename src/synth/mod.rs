@@ -7,11 +7,12 @@
 //! * Two cantilevers (90° and 0°), 25 mm wide, each at the overhang whose drape angle is 41.5°
 //!   (to 1e-4°): bracketed from twice the bending length c = (D/(ρg))^⅓, D = a·τ³/12 (a11 for
 //!   the warp, a22 for the weft; the material's own rigidity when it has a `[bending]` table),
-//!   then refined by secant steps in ln(overhang), kept inside the bracket. The cantilever is
-//!   cut [`BEND_REFINE`] times finer along than [`CantileverBend::new`]'s own mesh (elements of
-//!   about 1.6 mm), so that the data are within about 0.01° of the converged angle rather than
-//!   carrying the default mesh's discretisation error (about 1° at 4 × 10, measured on a 62.65
-//!   mm overhang); `ks-fit bend --mesh NXx(4·NY)` at the written overhang reproduces 41.5°.
+//!   then refined by secant steps in ln(overhang), kept inside the bracket. The mesh is chosen
+//!   as `ks-fit bend` chooses its own: the overhang found on ladder level 0 ([`bend_mesh`]:
+//!   elements of about 6.25 × 3.1 mm) is solved on two meshes twice and four times as fine,
+//!   and the search repeated on the coarsest whose Richardson estimate of the angle error is
+//!   below [`BEND_TOL_DEG`] (0.01°); the dataset's notes name the mesh and the estimate, and
+//!   `ks-fit bend --mesh` on that mesh at the written overhang reproduces 41.5°.
 //! * `repeats` curves per tensile angle. With `noise` = REL each repeat's forces are scaled by
 //!   one factor 1 + REL·z (z standard normal, the factor held at ≥ 0) and each point by
 //!   1 + REL/10·z; with `misalign_deg` each repeat's strip is cut at its nominal angle + DEG·z
@@ -44,16 +45,37 @@ const STRIP: (f64, f64) = (0.05, 0.075);
 /// Cantilever width, m.
 const BEND_WIDTH: f64 = 0.025;
 
-/// How many times finer along than `ks-fit bend`'s default mesh the cantilevers are solved.
-/// Measured on a 62.65 mm warp overhang with bending of its own (B = 3e-5 N·m): 4 × 10 drapes
-/// 41.50°, 4 × 40 42.460°, 16 × 40 42.460°, 8 × 20 42.430°.
-pub const BEND_REFINE: usize = 4;
+/// The drape-angle error (degrees) the synthetic cantilevers' mesh must meet: the overhang is
+/// searched on the coarsest of [`BEND_LEVELS`] meshes ([`bend_mesh`]) whose Richardson
+/// estimate of the angle error at that overhang is below it (ten times tighter than `ks-fit
+/// bend`'s default, so that data carry no visible mesh error).
+pub const BEND_TOL_DEG: f64 = 0.01;
 
-/// The mesh the cantilevers are solved on.
-fn synth_bend_mesh(overhang: f64, angle: f64) -> (usize, usize) {
+/// Meshes of the cantilever ladder.
+pub const BEND_LEVELS: usize = 3;
+
+/// The cantilever mesh of ladder level `k`: [`CantileverBend::new`]'s own (elements of about
+/// 6.25 mm) cut twice as fine along, then doubled each way `k` times.
+pub fn bend_mesh(overhang: f64, angle: f64, k: usize) -> (usize, usize) {
     let (nx, ny) = CantileverBend::new(BEND_WIDTH, overhang, angle).mesh;
-    (nx, BEND_REFINE * ny)
+    (nx << k, (2 * ny) << k)
 }
+
+/// A synthetic cantilever's overhang and how it was found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoundOverhang {
+    /// m
+    pub overhang: f64,
+    /// its drape angle on `mesh`, degrees
+    pub angle_deg: f64,
+    pub mesh: (usize, usize),
+    /// the Richardson estimate of that angle's mesh error, degrees (`None`: the ladder's
+    /// angles do not converge monotonically)
+    pub error_deg: Option<f64>,
+    /// the ladder's angles at the level-0 overhang, coarse to fine
+    pub ladder: Vec<((usize, usize), f64)>,
+}
+
 /// Drape-angle tolerance of the overhang search, degrees.
 const ANGLE_TOL: f64 = 1e-4;
 
@@ -206,16 +228,31 @@ pub fn synthesize_with(
     opts.check()?;
     let start = Instant::now();
     let tensile = synth_tensile(lab, opts, start, progress)?;
-    let mut bend = Vec::new();
+    let (mut bend, mut notes) = (Vec::new(), Vec::new());
     for (angle, stem) in [(90.0, "warp"), (0.0, "weft")] {
         let t0 = Instant::now();
         let test = format!("cantilever {stem} ({angle}°)");
         let solves = std::cell::Cell::new(0);
-        let overhang = find_overhang(lab, angle, &test, &solves)?;
+        let found = find_overhang(lab, angle, &test, &solves)?;
+        let mesh = format!("{}x{}", found.mesh.0, found.mesh.1);
+        let error = match found.error_deg {
+            Some(e) if e < BEND_TOL_DEG => format!("estimated mesh error {e:.4}°"),
+            Some(e) => format!("WARNING: estimated mesh error {e:.4}°, over {BEND_TOL_DEG}°"),
+            None => "WARNING: the mesh ladder does not converge monotonically, no estimate".into(),
+        };
+        let ladder: Vec<String> = found
+            .ladder
+            .iter()
+            .map(|(m, a)| format!("{}x{} {a:.4}°", m.0, m.1))
+            .collect();
+        notes.push(format!(
+            "{test}: overhang found on {mesh}, {error} (ladder at the first overhang: {})",
+            ladder.join(", ")
+        ));
         progress(&format!(
-            "{test}: overhang {:.4} mm for {:.5}° ({} solves) in {:.2} s (elapsed {:.1} s)",
-            overhang.0 * 1e3,
-            overhang.1,
+            "{test}: overhang {:.4} mm for {:.5}° on {mesh}, {error} ({} solves) in {:.2} s (elapsed {:.1} s)",
+            found.overhang * 1e3,
+            found.angle_deg,
             solves.get(),
             t0.elapsed().as_secs_f64(),
             start.elapsed().as_secs_f64()
@@ -223,7 +260,7 @@ pub fn synthesize_with(
         bend.push(BendTest {
             angle_deg: angle,
             width: BEND_WIDTH,
-            overhang: overhang.0,
+            overhang: found.overhang,
             drape_angle_deg: DEFAULT_DRAPE_ANGLE_DEG,
         });
     }
@@ -235,7 +272,7 @@ pub fn synthesize_with(
         tensile,
         bend,
         known: Default::default(),
-        notes: Vec::new(),
+        notes,
     })
 }
 
@@ -315,13 +352,16 @@ fn synth_tensile(
     Ok(tensile)
 }
 
-/// The overhang (m) whose drape angle is 41.5° and that angle, for a cantilever cut at `angle`.
+/// The overhang (m) whose drape angle is 41.5° for a cantilever cut at `angle`: searched on
+/// ladder level 0, the angle there checked on levels 1 and 2, and searched again on the
+/// coarsest level whose estimated angle error is below [`BEND_TOL_DEG`] (the finest where
+/// none is, or where the ladder does not converge monotonically).
 fn find_overhang(
     lab: &LabModel,
     angle: f64,
     test: &str,
     solves: &std::cell::Cell<usize>,
-) -> Result<(f64, f64), SynthError> {
+) -> Result<FoundOverhang, SynthError> {
     let target = DEFAULT_DRAPE_ANGLE_DEG;
     let weight = lab.areal_density() * crate::assembly::STANDARD_GRAVITY;
     let rigidity = lab.rigidity_guess(angle);
@@ -336,17 +376,59 @@ fn find_overhang(
     // the mesh follows the overhang as `CantileverBend::new` chooses it; it is held during a
     // search (the angle is then smooth in the overhang) and the search repeated if the found
     // overhang asks for another mesh
-    let mut last = None;
+    let mut found = None;
     for _ in 0..4 {
-        let mesh = synth_bend_mesh(guess, angle);
-        let found = search(lab, angle, mesh, guess, target, test, solves)?;
-        last = Some(found);
-        if synth_bend_mesh(found.0, angle) == mesh {
-            return Ok(found);
+        let mesh = bend_mesh(guess, angle, 0);
+        let f = search(lab, angle, mesh, guess, target, test, solves)?;
+        found = Some((f, mesh));
+        if bend_mesh(f.0, angle, 0) == mesh {
+            break;
         }
-        guess = found.0;
+        guess = f.0;
     }
-    last.ok_or_else(|| SynthError::Bracket(format!("{test}: no overhang found")))
+    let ((overhang, angle0), mesh0) =
+        found.ok_or_else(|| SynthError::Bracket(format!("{test}: no overhang found")))?;
+    let mut ladder = vec![(mesh0, angle0)];
+    for k in 1..BEND_LEVELS {
+        let mesh = (mesh0.0 << k, mesh0.1 << k);
+        solves.set(solves.get() + 1);
+        let (a, _) = lab
+            .cantilever((BEND_WIDTH, overhang, angle), mesh)
+            .map_err(|source| SynthError::Scene {
+                test: format!(
+                    "{test} at overhang {:.4} mm on {}x{}",
+                    overhang * 1e3,
+                    mesh.0,
+                    mesh.1
+                ),
+                source,
+            })?;
+        ladder.push((mesh, a));
+    }
+    let n = ladder.len();
+    let limit = crate::converge::monotone_limit(ladder[n - 3].1, ladder[n - 2].1, ladder[n - 1].1);
+    let errors: Vec<Option<f64>> = ladder
+        .iter()
+        .map(|(_, a)| limit.map(|q| (a - q).abs()))
+        .collect();
+    let k = errors
+        .iter()
+        .position(|e| e.is_some_and(|e| e < BEND_TOL_DEG))
+        .unwrap_or(n - 1);
+    let (mesh, angle_deg, overhang) = if k == 0 {
+        (mesh0, angle0, overhang)
+    } else {
+        let mesh = ladder[k].0;
+        let (l, a) = search(lab, angle, mesh, overhang, target, test, solves)?;
+        (mesh, a, l)
+    };
+    Ok(FoundOverhang {
+        overhang,
+        angle_deg,
+        mesh,
+        error_deg: errors[k],
+        ladder,
+    })
 }
 
 /// Secant steps in ln(overhang) on a fixed mesh from `guess`, kept inside the bracket once

@@ -402,7 +402,7 @@ pub fn cmd_synth(
     let comment = format!(
         "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
          options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{}\n\
-         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees",
+         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees{}",
         material.display(),
         lab.model_name(),
         opts.max_strain,
@@ -414,7 +414,11 @@ pub fn cmd_synth(
         opts.mesh.0,
         opts.mesh.1,
         opts.grading.across,
-        opts.grading.along
+        opts.grading.along,
+        data.notes
+            .iter()
+            .map(|n| format!("\n{n}"))
+            .collect::<String>()
     );
     kshell::dataset::write_dataset_with_comment(out, &data, &comment)
         .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;
