@@ -38,11 +38,40 @@ fn a_forced_mesh_writes_the_surface_the_csv_and_the_report() {
         "mesh = \"6x6\"",
         "stable = true",
         "[solver]",
+        "strategy = \"full-step\"",
         "iterations = ",
     ] {
         assert!(toml.contains(key), "missing {key:?} in\n{toml}");
     }
     assert!(toml.contains("forced by --mesh"), "{toml}");
+    // another strategy reaches the same equilibrium and says which it was
+    let other = dir.join("frame-tr");
+    let (rc, tr, err) = ks_fit(&[
+        "scene",
+        "picture-frame",
+        "--material",
+        COTTON,
+        "--mesh",
+        "6x6",
+        "--steps",
+        "3",
+        "--shear-deg",
+        "30",
+        "--strategy",
+        "trust-region",
+        "--no-image",
+        "--out",
+        s(&other),
+    ]);
+    assert_eq!(rc, 0, "{err}");
+    let last = |csv: &str| -> f64 {
+        let row = csv.lines().last().unwrap();
+        row.split(',').nth(1).unwrap().parse().unwrap()
+    };
+    let (a, b) = (last(&stdout), last(&tr));
+    assert!((a / b - 1.0).abs() < 1e-6, "{a} N against {b} N");
+    let toml = std::fs::read_to_string(other.join("scene.toml")).unwrap();
+    assert!(toml.contains("strategy = \"trust-region\""), "{toml}");
     // 6 × 6 faces sampled 4 × 4 each, welded: 25 × 25 vertices
     let obj = std::fs::read_to_string(out.join("shape.obj")).unwrap();
     for (tag, n) in [("v ", 625), ("vn ", 625), ("vt ", 625), ("f ", 576)] {

@@ -40,6 +40,12 @@ pub struct ShowArgs {
     /// buckles: 0 the lowest mode, any other value a pseudo-random mix of low modes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// How each equilibrium is solved: `full-step`, `ramp` and `adaptive` (Newton with the
+    /// energy line search and the backward-Euler fallback; they differ in how a load is
+    /// brought on, here only the drape's weight) or `trust-region` (trust-region Newton on
+    /// the factorised Hessian, backward Euler the last resort). See the stability atlas.
+    #[arg(long, default_value = "full-step")]
+    strategy: kshell::solve::Strategy,
     /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
     /// is reported anyway).
     #[arg(short, long)]
@@ -172,7 +178,7 @@ impl ShowScene {
             ShowScene::PictureFrame { shear_deg, .. } => Kind::Frame(*shear_deg),
             ShowScene::CornerPull { stretch, .. } => Kind::Corner(*stretch),
         };
-        run_kind(kind, material, mesh, a.steps, a.seed)
+        run_kind(kind, material, mesh, a.steps, a.seed, a.strategy)
     }
 }
 
@@ -192,11 +198,13 @@ fn run_kind(
     mesh: usize,
     steps: usize,
     seed: u64,
+    strategy: kshell::solve::Strategy,
 ) -> Result<Run, SceneError> {
     // wrinkling and folding sheets spend long stretches in backward-Euler relaxation: a
     // budget of 60 iterations per solve failed a 10 % corner pull on 20 × 20
     let solver = NewtonOptions {
         max_iterations: SCENE_ITERATIONS,
+        strategy,
         ..NewtonOptions::default()
     };
     let t0 = Instant::now();
@@ -433,8 +441,8 @@ fn write_outputs(
     }
     let _ = write!(
         toml,
-        "stable = {}\nseconds = {:.3}\nseconds_chosen_mesh = {:.3}\nseed = {}\n\n[solver]\nsteps = {}\ncut_steps = {}\niterations = {}\nfactorizations = {}\nbackward_euler_steps = {}\nsaddle_escapes = {}\nassembly_seconds = {:.3}\nfactor_seconds = {:.3}\n",
-        d.stable, seconds, run.seconds, scene.args().seed, c.steps, c.cut_steps, c.iterations,
+        "stable = {}\nseconds = {:.3}\nseconds_chosen_mesh = {:.3}\nseed = {}\n\n[solver]\nstrategy = \"{}\"\nsteps = {}\ncut_steps = {}\niterations = {}\nfactorizations = {}\nbackward_euler_steps = {}\nsaddle_escapes = {}\nassembly_seconds = {:.3}\nfactor_seconds = {:.3}\n",
+        d.stable, seconds, run.seconds, scene.args().seed, scene.args().strategy.name(), c.steps, c.cut_steps, c.iterations,
         c.factorizations, c.backward_euler_steps, c.saddle_escapes, c.assembly_seconds,
         c.factor_seconds
     );
@@ -538,7 +546,7 @@ pub fn report_figures(
     let (mut figures, mut notes) = (Vec::new(), Vec::new());
     for (kind, mesh, title, what) in REPORT_MESHES {
         progress(&format!("scene {title} on {mesh}x{mesh}"));
-        let drawn = run_kind(kind, material, mesh, 8, 0)
+        let drawn = run_kind(kind, material, mesh, 8, 0, Default::default())
             .map_err(|e| e.to_string())
             .and_then(|run| {
                 let d = &run.deformed;
