@@ -3,6 +3,7 @@
 //! Every user error is one line on stderr starting with `ks-fit: error:` and exit code 2.
 
 mod auto;
+mod batch;
 mod export;
 mod fabric;
 mod guard;
@@ -157,6 +158,12 @@ enum Command {
     },
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
     Demo,
+    /// Fit a library of fabrics listed in a manifest CSV: each fabric's material, report, log
+    /// and status in OUT/<fabric>/, summary.csv and index.html in OUT, rewritten as fabrics
+    /// finish; resumable (a fabric done with unchanged inputs is skipped); side by side with
+    /// --jobs, or as a Slurm job array (--slurm, --task, --collect). Exit 3 when a fabric
+    /// failed, failed its fit (--max-error) or was not run.
+    Batch(batch::BatchArgs),
     /// Fit a fabric dataset: writes the fitted material (TOML, with a [fit] table of how well
     /// it reproduces every test) and prints the per-test table; progress on stderr.
     Fit {
@@ -412,6 +419,7 @@ fn main() -> ExitCode {
             file,
             allow_outside,
         } => cmd_check(&file, allow_outside).map(|()| true),
+        Command::Batch(args) => batch::cmd_batch(&args),
         Command::Fit {
             file,
             output,
