@@ -61,7 +61,7 @@ fn summary(out: &Path) -> Vec<csv::StringRecord> {
     let mut r = csv::Reader::from_reader(text.as_bytes());
     assert_eq!(
         r.headers().unwrap().iter().collect::<Vec<_>>().join(","),
-        "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_fitted_error_pct,warnings,material,report,log,error"
+        "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error"
     );
     r.records().map(|r| r.unwrap()).collect()
 }
@@ -83,20 +83,22 @@ fn a_library_is_fitted_side_by_side_resumed_and_summarised() {
     for r in &rows[..2] {
         assert_eq!((&r[1], &r[2]), ("done", "true"), "{r:?}");
         assert!(
-            out.join(&r[9]).is_file() && out.join(&r[10]).is_file() && out.join(&r[11]).is_file()
+            out.join(&r[10]).is_file() && out.join(&r[11]).is_file() && out.join(&r[12]).is_file(),
+            "{r:?}"
         );
+        assert!(r[8].starts_with("verdict: fit within --max-error"), "{r:?}");
         let worst: f64 = r[7].parse().unwrap();
         assert!(worst > 0.0 && worst < 10.0, "{r:?}");
     }
     assert_eq!(&rows[2][1], "failed");
     assert!(
-        rows[2][12].contains("nothere/fabric.toml: cannot read"),
+        rows[2][13].contains("nothere/fabric.toml: cannot read"),
         "{:?}",
         rows[2]
     );
     // the fit's own one-line error is the fabric's
     assert_eq!(&rows[3][1], "failed");
-    assert!(rows[3][12].contains("degree"), "{:?}", rows[3]);
+    assert!(rows[3][13].contains("degree"), "{:?}", rows[3]);
     assert!(out.join("refused/log.txt").is_file());
     // the page is well-formed and links each report
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();

@@ -61,8 +61,11 @@ struct FitFigures {
     wall_seconds: String,
     evaluations: String,
     newton_iterations: String,
-    /// largest mean relative error of a fitted test, percent
+    /// largest mean |relative error| of a fitted curve, percent (raw: repeats' scale scatter
+    /// included; the verdict judges repeats by their shape, see `kshell::fit::verdict`)
     worst_error_pct: String,
+    /// the fit's verdict line
+    verdict: String,
 }
 
 fn fit_figures(material: &Path) -> FitFigures {
@@ -104,11 +107,16 @@ fn fit_figures(material: &Path) -> FitFigures {
         worst_error_pct: worst
             .map(|e| format!("{:.2}", 100.0 * e))
             .unwrap_or_default(),
+        verdict: fit
+            .get("verdict")
+            .and_then(|v| v.as_str())
+            .unwrap_or_default()
+            .to_string(),
     }
 }
 
 /// The header of `summary.csv`.
-pub const SUMMARY_HEADER: &str = "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_fitted_error_pct,warnings,material,report,log,error";
+pub const SUMMARY_HEADER: &str = "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error";
 
 /// One summary row per fabric: (row, its status if it has one).
 pub struct Entry<'a> {
@@ -136,7 +144,7 @@ fn cells(out: &Path, e: &Entry) -> Vec<String> {
     };
     let Some(s) = e.status.as_ref().filter(|_| !e.running) else {
         let mut v = vec![f.clone(), state];
-        v.resize(13, String::new());
+        v.resize(14, String::new());
         return v;
     };
     let material = format!("{f}/material.toml");
@@ -157,6 +165,7 @@ fn cells(out: &Path, e: &Entry) -> Vec<String> {
         figures.evaluations,
         figures.newton_iterations,
         figures.worst_error_pct,
+        figures.verdict,
         s.warnings.to_string(),
         if has(&material) {
             material
@@ -194,7 +203,7 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
             .count(),
     );
     let mut h = format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"/><title>{t}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;text-align:left}}.failed{{background:#fdd}}.false{{background:#ffe8c0}}</style></head>\n<body><h1>{t}</h1>\n<p>{n} fabrics: {done} fitted, {failed} failed, {rest} to go. Written by ks-fit batch; summary.csv holds the same table.</p>\n<table>\n<tr><th>fabric</th><th>status</th><th>passed</th><th>seconds</th><th>evaluations</th><th>Newton iterations</th><th>worst fitted error (%)</th><th>warnings</th><th>outputs</th><th>error</th></tr>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"/><title>{t}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;text-align:left}}.failed{{background:#fdd}}.false{{background:#ffe8c0}}</style></head>\n<body><h1>{t}</h1>\n<p>{n} fabrics: {done} fitted, {failed} failed, {rest} to go. Written by ks-fit batch; summary.csv holds the same table.</p>\n<table>\n<tr><th>fabric</th><th>status</th><th>passed</th><th>seconds</th><th>evaluations</th><th>Newton iterations</th><th>worst curve error (%)</th><th>verdict</th><th>warnings</th><th>outputs</th><th>error</th></tr>\n",
         t = escape(title),
         n = entries.len(),
         rest = entries.len() - done - failed,
@@ -216,7 +225,7 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
         let _ = std::fmt::Write::write_fmt(
             &mut h,
             format_args!(
-                "<tr{class}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}{}{}</td><td>{}</td></tr>\n",
+                "<tr{class}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}{}{}</td><td>{}</td></tr>\n",
                 escape(&c[0]),
                 escape(&c[1]),
                 escape(&c[2]),
@@ -225,10 +234,11 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
                 escape(&c[6]),
                 escape(&c[7]),
                 escape(&c[8]),
-                link(&c[10], "report"),
-                link(&c[9], "material"),
-                link(&c[11], "log"),
-                escape(&c[12]),
+                escape(&c[9]),
+                link(&c[11], "report"),
+                link(&c[10], "material"),
+                link(&c[12], "log"),
+                escape(&c[13]),
             ),
         );
     }
@@ -274,7 +284,7 @@ mod tests {
         let rec = reader.records().next().unwrap().unwrap();
         assert_eq!(rec.len(), SUMMARY_HEADER.split(',').count());
         assert_eq!(&rec[1], "failed");
-        assert_eq!(&rec[12], "x/fabric.toml:3: bad \"value\", here");
+        assert_eq!(&rec[13], "x/fabric.toml:3: bad \"value\", here");
         let html = summary_html(Path::new("/nonexistent"), &entries, "t <1>");
         assert!(html.contains("t &lt;1&gt;") && html.contains("class=\"failed\""));
     }
