@@ -9,10 +9,11 @@
 //! force is dW/dδ, the reaction of the held points.
 
 use super::frame::Deformed;
-use super::sheet::{march, Sheet};
+use super::sheet::{march, Sheet, SheetModel};
 use super::SceneError;
 use crate::material::FabricMaterial;
 use crate::solve::{NewtonOptions, SolveReport};
+use crate::tri::{TriMaterial, TriModel};
 use crate::Vec3;
 
 /// A corner pull set up to run.
@@ -62,6 +63,20 @@ impl CornerPull {
     }
 
     pub fn run(&self, material: &FabricMaterial) -> Result<(Vec<PullPoint>, Deformed), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::new(material, self.side, self.mesh)?)
+    }
+
+    /// [`CornerPull::run`] on a triangle model's sheet.
+    pub fn run_tri(
+        &self,
+        material: &TriMaterial,
+    ) -> Result<(Vec<PullPoint>, Deformed<TriModel>), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::tri(material, self.side, self.mesh)?)
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
         if !(self.stretch.is_finite() && self.stretch > 0.0 && self.stretch < 1.0) {
             return Err(SceneError::Input(format!(
                 "stretch must be in (0, 1), got {}",
@@ -76,7 +91,13 @@ impl CornerPull {
                 self.side * 1e3
             )));
         }
-        let sheet = Sheet::new(material, self.side, self.mesh)?;
+        Ok(())
+    }
+
+    fn run_on<M: SheetModel>(
+        &self,
+        sheet: Sheet<M>,
+    ) -> Result<(Vec<PullPoint>, Deformed<M>), SceneError> {
         let rest = sheet.rest().to_vec();
         let (l, c, tol) = (self.side, self.clip, 1e-9 * self.side);
         // +1: the clip at (L, L), moving along +d; −1: the clip at (0, 0)

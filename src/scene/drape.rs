@@ -13,11 +13,12 @@
 //! the one returned is stable.
 
 use super::frame::Deformed;
-use super::sheet::{march, Sheet};
+use super::sheet::{march, Sheet, SheetModel};
 use super::SceneError;
-use crate::assembly::{ShellModel, STANDARD_GRAVITY};
+use crate::assembly::STANDARD_GRAVITY;
 use crate::material::FabricMaterial;
 use crate::solve::{continuation, ContinuationReport, NewtonOptions, SolveReport};
+use crate::tri::{TriMaterial, TriModel};
 use crate::Vec3;
 
 /// A drape set up to run.
@@ -64,13 +65,33 @@ impl Drape {
     }
 
     pub fn run(&self, material: &FabricMaterial) -> Result<(DrapeShape, Deformed), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::new(material, self.side, self.mesh)?)
+    }
+
+    /// [`Drape::run`] on a triangle model's sheet.
+    pub fn run_tri(
+        &self,
+        material: &TriMaterial,
+    ) -> Result<(DrapeShape, Deformed<TriModel>), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::tri(material, self.side, self.mesh)?)
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
         if !(self.span.is_finite() && self.span > 0.0 && self.span <= self.side) {
             return Err(SceneError::Input(format!(
                 "the corners' span must be in (0, side], got {} m for a {} m sheet",
                 self.span, self.side
             )));
         }
-        let mut sheet = Sheet::new(material, self.side, self.mesh)?;
+        Ok(())
+    }
+
+    fn run_on<M: SheetModel>(
+        &self,
+        mut sheet: Sheet<M>,
+    ) -> Result<(DrapeShape, Deformed<M>), SceneError> {
         let (n, l) = (self.mesh, self.side);
         let corners = [sheet.node(0, n), sheet.node(n, n)];
         let held: Vec<usize> = corners.iter().flat_map(|&v| 3 * v..3 * v + 3).collect();
@@ -127,9 +148,9 @@ impl Drape {
     /// Brings the weight on: the whole load by Newton with the backward-Euler fallback (a
     /// pseudo-time relaxation where the Hessian is indefinite: the flat sheet's top edge is in
     /// compression between the pins), then, if that fails, load continuation.
-    fn hang(
+    fn hang<M: SheetModel>(
         &self,
-        sheet: &mut Sheet,
+        sheet: &mut Sheet<M>,
         system: &crate::solve::FreeSystem,
         x: &mut Vec<Vec3>,
     ) -> Result<ContinuationReport, SceneError> {
@@ -144,7 +165,7 @@ impl Drape {
                 last,
             });
         }
-        let apply = |m: &mut ShellModel, t: f64, _: &[Vec3]| {
+        let apply = |m: &mut M, t: f64, _: &[Vec3]| {
             m.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * t]);
         };
         continuation(&mut sheet.model, system, x, &self.solver, 1.0, apply).map_err(
@@ -156,8 +177,12 @@ impl Drape {
     }
 }
 
-fn measure(sheet: &Sheet, x: &[Vec3], report: SolveReport) -> Result<DrapeShape, SceneError> {
-    let samples = super::export::sample(sheet, x, 4)?;
+fn measure<M: SheetModel>(
+    sheet: &Sheet<M>,
+    x: &[Vec3],
+    report: SolveReport,
+) -> Result<DrapeShape, SceneError> {
+    let samples = M::surface(sheet, x, 4)?;
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for p in &samples.positions {
         for c in 0..3 {

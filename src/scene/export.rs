@@ -5,8 +5,9 @@
 //! Texture coordinates are the rest position in metres of fabric: u along the warp, v along
 //! the weft (a texture with one repeat per metre tiles the cloth at its true scale).
 
-use super::sheet::Sheet;
+use super::sheet::{Sheet, SheetModel};
 use super::SceneError;
+use crate::assembly::ShellModel;
 use crate::Vec3;
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -22,7 +23,7 @@ pub struct SurfaceMesh {
 }
 
 /// Samples the limit surface of `sheet` at control points `x`, `k` × `k` quads per cage face.
-pub fn sample(sheet: &Sheet, x: &[Vec3], k: usize) -> Result<SurfaceMesh, SceneError> {
+pub fn sample(sheet: &Sheet<ShellModel>, x: &[Vec3], k: usize) -> Result<SurfaceMesh, SceneError> {
     let k = k.max(1);
     let surface = sheet.model.basis.surface();
     let rest = sheet.rest();
@@ -61,6 +62,56 @@ pub fn sample(sheet: &Sheet, x: &[Vec3], k: usize) -> Result<SurfaceMesh, SceneE
         }
     }
     Ok(out)
+}
+
+/// A triangle model's sheet as a surface: its nodes, one quad per grid cell (the quad's
+/// diagonal is the renderer's, not necessarily the model's), unit normals averaged from the
+/// cells around each node, texture coordinates the rest positions.
+pub fn lattice_surface<M: SheetModel>(sheet: &Sheet<M>, x: &[Vec3]) -> SurfaceMesh {
+    let n = sheet.n;
+    let mut out = SurfaceMesh::default();
+    let id = |i: usize, j: usize| j * (n + 1) + i;
+    for j in 0..=n {
+        for i in 0..=n {
+            let v = sheet.node(i, j);
+            out.positions.push(x[v]);
+            let r = sheet.rest()[v];
+            out.uv.push([r[0], r[1]]);
+        }
+    }
+    let mut normals = vec![[0.0; 3]; out.positions.len()];
+    for j in 0..n {
+        for i in 0..n {
+            let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+            let p = |k: usize| out.positions[q[k]];
+            let (a, b) = (sub(p(2), p(0)), sub(p(3), p(1)));
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            for &v in &q {
+                (0..3).for_each(|k| normals[v][k] += c[k]);
+            }
+            out.quads.push(q);
+        }
+    }
+    out.normals = normals
+        .into_iter()
+        .map(|v| {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if l > 0.0 {
+                [v[0] / l, v[1] / l, v[2] / l]
+            } else {
+                [0.0, 0.0, 1.0]
+            }
+        })
+        .collect();
+    out
+}
+
+fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 impl SurfaceMesh {

@@ -9,10 +9,12 @@
 //! frame's pulled diagonal F = M / (L sin(α/2)), α = 90° − γ the corner angle (so F_s =
 //! F / (2 cos(α/2)), the normalisation of Harrison, Clifford & Long 2004).
 
-use super::sheet::{march, Sheet, SolveCounts};
+use super::sheet::{march, Sheet, SheetModel, SolveCounts};
 use super::SceneError;
+use crate::assembly::ShellModel;
 use crate::material::FabricMaterial;
 use crate::solve::{NewtonOptions, SolveReport};
+use crate::tri::{TriMaterial, TriModel};
 use crate::Vec3;
 
 /// A picture-frame test set up to run.
@@ -52,8 +54,8 @@ pub struct FramePoint {
 }
 
 /// A scene's final shape and what the solver did.
-pub struct Deformed {
-    pub sheet: Sheet,
+pub struct Deformed<M = ShellModel> {
+    pub sheet: Sheet<M>,
     pub x: Vec<Vec3>,
     pub counts: SolveCounts,
     /// The final equilibrium's reduced Hessian is positive definite.
@@ -62,8 +64,8 @@ pub struct Deformed {
     pub last: SolveReport,
 }
 
-impl Deformed {
-    pub fn new(sheet: Sheet, x: Vec<Vec3>, counts: SolveCounts, last: SolveReport) -> Self {
+impl<M> Deformed<M> {
+    pub fn new(sheet: Sheet<M>, x: Vec<Vec3>, counts: SolveCounts, last: SolveReport) -> Self {
         Self {
             sheet,
             x,
@@ -92,13 +94,33 @@ impl PictureFrame {
         &self,
         material: &FabricMaterial,
     ) -> Result<(Vec<FramePoint>, Deformed), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::new(material, self.side, self.mesh)?)
+    }
+
+    /// [`PictureFrame::run`] on a triangle model's sheet.
+    pub fn run_tri(
+        &self,
+        material: &TriMaterial,
+    ) -> Result<(Vec<FramePoint>, Deformed<TriModel>), SceneError> {
+        self.check()?;
+        self.run_on(Sheet::tri(material, self.side, self.mesh)?)
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
         if !(self.shear_deg.is_finite() && self.shear_deg.abs() < 89.0) {
             return Err(SceneError::Input(format!(
                 "shear angle must be within ±89°, got {}",
                 self.shear_deg
             )));
         }
-        let sheet = Sheet::new(material, self.side, self.mesh)?;
+        Ok(())
+    }
+
+    fn run_on<M: SheetModel>(
+        &self,
+        sheet: Sheet<M>,
+    ) -> Result<(Vec<FramePoint>, Deformed<M>), SceneError> {
         let held: Vec<usize> = sheet
             .boundary()
             .iter()

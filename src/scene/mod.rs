@@ -48,7 +48,7 @@ pub enum SceneError {
 
 /// The free-DOF system of a scene, its set-up failure reported as a scene error.
 fn free_system(
-    model: &ShellModel,
+    model: &dyn crate::model::ClothModel,
     fixed: &[bool],
     slaves: Vec<Slave>,
 ) -> Result<FreeSystem, SceneError> {

@@ -8,26 +8,61 @@
 //! 2P₀ − P₁ makes (G + 4P₀ + P₁)/6 = P₀), and the limit surface is affine-invariant, so holding
 //! a boundary row at A·X + b holds the limit edge at exactly A·X + b.
 
+use super::export::SurfaceMesh;
 use super::{build_model, SceneError};
 use crate::assembly::{ShellModel, Want};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
+use crate::model::ClothModel;
 use crate::solve::{newton, FallbackCounts, FreeSystem, NewtonOptions, SolveError, SolveReport};
 use crate::subdiv::BoundaryRule;
+use crate::tri::{TriGrid, TriMaterial, TriModel};
 use crate::Vec3;
 
-/// An L × L square of fabric on an n × n cage.
-pub struct Sheet {
-    pub model: ShellModel,
+/// What a scene needs of a cloth model beyond the solver's contract: a settable gravity and
+/// its deformed surface as a welded quad mesh (for the shapes written and drawn, and the
+/// drape's measures). The subdivision shell and the triangle models are both sheets.
+pub trait SheetModel: ClothModel + Sized {
+    fn set_gravity(&mut self, g: Vec3);
+    /// The surface at node positions `x`: the shell's limit surface sampled `k` × `k` per
+    /// cage face; a triangle model's nodes, one quad per grid cell (`k` unused).
+    fn surface(sheet: &Sheet<Self>, x: &[Vec3], k: usize) -> Result<SurfaceMesh, SceneError>;
+}
+
+impl SheetModel for ShellModel {
+    fn set_gravity(&mut self, g: Vec3) {
+        ShellModel::set_gravity(self, g)
+    }
+    fn surface(sheet: &Sheet<Self>, x: &[Vec3], k: usize) -> Result<SurfaceMesh, SceneError> {
+        super::export::sample(sheet, x, k)
+    }
+}
+
+impl SheetModel for TriModel {
+    fn set_gravity(&mut self, g: Vec3) {
+        TriModel::set_gravity(self, g)
+    }
+    fn surface(sheet: &Sheet<Self>, x: &[Vec3], _k: usize) -> Result<SurfaceMesh, SceneError> {
+        Ok(super::export::lattice_surface(sheet, x))
+    }
+}
+
+/// An L × L square of fabric, warp along x, on an n × n cage (the shell) or grid (a triangle
+/// model).
+pub struct Sheet<M = ShellModel> {
+    pub model: M,
     /// m
     pub side: f64,
     /// faces each way
     pub n: usize,
-    /// control point of each lattice node (i, j), row-major in j
+    /// node of each lattice point (i, j), row-major in j
     nodes: Vec<usize>,
+    /// rest position of every node (the shell's cage has phantom-free rows only on the
+    /// lattice; a triangle grid is the lattice)
+    rest: Vec<Vec3>,
 }
 
-impl Sheet {
+impl Sheet<ShellModel> {
     pub fn new(material: &FabricMaterial, side: f64, n: usize) -> Result<Self, SceneError> {
         super::positive("sheet side", side)?;
         let model = build_model(
@@ -39,28 +74,62 @@ impl Sheet {
             BoundaryRule::Phantom,
             Grading::UNIFORM,
         )?;
-        let h = side / n as f64;
-        let mut nodes = vec![usize::MAX; (n + 1) * (n + 1)];
-        for (v, p) in model.basis.control_points.iter().enumerate() {
-            let (i, j) = ((p[0] / h).round(), (p[1] / h).round());
-            if (0.0..=n as f64).contains(&i) && (0.0..=n as f64).contains(&j) {
-                nodes[j as usize * (n + 1) + i as usize] = v;
-            }
-        }
-        if nodes.contains(&usize::MAX) {
-            return Err(SceneError::Input(
-                "internal: a lattice node of the sheet has no control point".into(),
-            ));
-        }
+        let rest = model.basis.control_points.clone();
+        let nodes = lattice(&rest, side, n)?;
         Ok(Self {
             model,
             side,
             n,
             nodes,
+            rest,
         })
     }
+}
 
-    /// The control point at lattice node (i, j), rest position (i, j) · side / n.
+impl Sheet<TriModel> {
+    /// The sheet on a triangle model (Miguel et al. 2012's grid: each cell split by one
+    /// diagonal), warp along x.
+    pub fn tri(material: &TriMaterial, side: f64, n: usize) -> Result<Self, SceneError> {
+        super::positive("sheet side", side)?;
+        if n == 0 {
+            return Err(SceneError::Input(
+                "the sheet needs at least one face each way".into(),
+            ));
+        }
+        let model = TriModel::new(TriGrid::rectangle(side, side, n, n), material.clone(), 0.0);
+        let rest: Vec<Vec3> = model.grid.rest.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        let nodes = lattice(&rest, side, n)?;
+        Ok(Self {
+            model,
+            side,
+            n,
+            nodes,
+            rest,
+        })
+    }
+}
+
+/// The node at each lattice point (i, j) · side / n, row-major in j.
+fn lattice(rest: &[Vec3], side: f64, n: usize) -> Result<Vec<usize>, SceneError> {
+    let h = side / n as f64;
+    let mut nodes = vec![usize::MAX; (n + 1) * (n + 1)];
+    for (v, p) in rest.iter().enumerate() {
+        let (i, j) = ((p[0] / h).round(), (p[1] / h).round());
+        let on = (p[0] - i * h).abs() < 1e-9 * side && (p[1] - j * h).abs() < 1e-9 * side;
+        if on && (0.0..=n as f64).contains(&i) && (0.0..=n as f64).contains(&j) {
+            nodes[j as usize * (n + 1) + i as usize] = v;
+        }
+    }
+    if nodes.contains(&usize::MAX) {
+        return Err(SceneError::Input(
+            "internal: a lattice node of the sheet has no control point".into(),
+        ));
+    }
+    Ok(nodes)
+}
+
+impl<M: SheetModel> Sheet<M> {
+    /// The node at lattice point (i, j), rest position (i, j) · side / n.
     pub fn node(&self, i: usize, j: usize) -> usize {
         self.nodes[j * (self.n + 1) + i]
     }
@@ -76,7 +145,7 @@ impl Sheet {
     }
 
     pub fn rest(&self) -> &[Vec3] {
-        &self.model.basis.control_points
+        &self.rest
     }
 
     /// An out-of-plane offset per control point, zero on the boundary rows: the lowest mode
@@ -215,7 +284,7 @@ fn add_fallbacks(a: &mut FallbackCounts, b: &FallbackCounts) {
 /// every equilibrium of the main steps. Returns the counts and the last solve's report.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn march(
-    model: &ShellModel,
+    model: &dyn ClothModel,
     system: &FreeSystem,
     x: &mut Vec<Vec3>,
     steps: usize,
