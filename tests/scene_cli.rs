@@ -417,3 +417,60 @@ fn tensile_picks_a_mesh_whose_force_is_within_the_tolerance() {
         );
     }
 }
+
+/// `scene --model`: a triangle model on the same sheet, its nodes written as the shape, and
+/// the same fabric's frame force as the shell's (the model's parameters converted from the
+/// shell law's zero-strain moduli; the example cotton is linear, so the two agree where the
+/// sheet shears homogeneously, and the wrinkles differ a little).
+#[test]
+fn a_triangle_model_runs_the_scene_and_writes_its_own_nodes() {
+    let dir = folder("scene-model");
+    let run = |model: &str| {
+        let out = dir.join(model);
+        let (rc, stdout, err) = ks_fit(&[
+            "scene",
+            "picture-frame",
+            "--material",
+            COTTON,
+            "--mesh",
+            "6",
+            "--steps",
+            "3",
+            "--shear-deg",
+            "30",
+            "--model",
+            model,
+            "--no-image",
+            "--out",
+            s(&out),
+        ]);
+        assert_eq!(rc, 0, "{model}: {err}");
+        let last: f64 = stdout
+            .lines()
+            .last()
+            .unwrap()
+            .split(',')
+            .nth(1)
+            .unwrap()
+            .parse()
+            .unwrap();
+        (last, out, err)
+    };
+    let (shell, _, _) = run("kl");
+    let (tri, out, err) = run("stvk-ds");
+    assert!(err.contains("converted from the shell law"), "{err}");
+    assert!(
+        (tri / shell - 1.0).abs() < 0.05,
+        "stvk-ds {tri} N, shell {shell} N"
+    );
+    let toml = std::fs::read_to_string(out.join("scene.toml")).unwrap();
+    assert!(toml.contains("model = \"stvk-ds\""), "{toml}");
+    let obj = std::fs::read_to_string(out.join("shape.obj")).unwrap();
+    for (tag, n) in [("v ", 49), ("vn ", 49), ("vt ", 49), ("f ", 36)] {
+        let count = obj.lines().filter(|l| l.starts_with(tag)).count();
+        assert_eq!(count, n, "{tag}");
+    }
+    let (rc, _, err) = ks_fit(&["scene", "drape", "--material", COTTON, "--model", "cloth"]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("--model: unknown model 'cloth'"), "{err}");
+}

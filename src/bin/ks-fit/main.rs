@@ -12,6 +12,7 @@ mod models;
 mod recommend;
 mod render;
 mod scene;
+mod scene_shape;
 mod sheets;
 
 use clap::{Parser, Subcommand};

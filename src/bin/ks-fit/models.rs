@@ -9,7 +9,7 @@ use kshell::tri::{TriCantilever, TriKind, TriTensile};
 use std::path::Path;
 
 /// Reads the parameters, saying where they come from.
-fn source(kind: TriKind, material: &Path, command: &str) -> Result<TriSource, String> {
+pub fn source(kind: TriKind, material: &Path, command: &str) -> Result<TriSource, String> {
     let s = load_tri(material, kind).map_err(|e| e.to_string())?;
     if let TriSource::Shell(_) = s {
         eprintln!(

@@ -4,10 +4,11 @@
 //! quantities of interest as CSV, and `scene.toml` saying what was run and how well.
 
 use crate::guard::Guard;
+use crate::scene_shape::{SceneMaterial, Shape};
 use clap::Subcommand;
 use kshell::converge::{analyse, Level};
 use kshell::material::{load_material, FabricMaterial};
-use kshell::scene::{CornerPull, Deformed, Drape, PictureFrame, SceneError};
+use kshell::scene::{CornerPull, Drape, PictureFrame, SceneError};
 use kshell::solve::NewtonOptions;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -46,6 +47,12 @@ pub struct ShowArgs {
     /// the factorised Hessian, backward Euler the last resort). See the stability atlas.
     #[arg(long, default_value = "full-step")]
     strategy: kshell::solve::Strategy,
+    /// Cloth model: kl (the subdivision shell, Clyde et al. 2017), or a triangle model
+    /// (springs, soft-constraints, stvk-ds, xpbd) on the same sheet as a grid of n × n cells
+    /// split by one diagonal, with the file's [model] table or the shell law converted at
+    /// each mesh's cell size.
+    #[arg(long, default_value = "kl")]
+    model: String,
     /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
     /// is reported anyway).
     #[arg(short, long)]
@@ -110,7 +117,7 @@ struct Run {
     qoi: f64,
     /// the scene's CSV (header and rows)
     csv: String,
-    deformed: Deformed,
+    shape: Shape,
     seconds: f64,
 }
 
@@ -171,7 +178,7 @@ impl ShowScene {
         }
     }
 
-    fn run(&self, material: &FabricMaterial, mesh: usize) -> Result<Run, SceneError> {
+    fn run(&self, material: &SceneMaterial, mesh: usize) -> Result<Run, SceneError> {
         let a = self.args();
         let kind = match self {
             ShowScene::Drape { .. } => Kind::Drape,
@@ -194,7 +201,7 @@ enum Kind {
 /// Solves one scene on one mesh.
 fn run_kind(
     kind: Kind,
-    material: &FabricMaterial,
+    material: &SceneMaterial,
     mesh: usize,
     steps: usize,
     seed: u64,
@@ -208,7 +215,7 @@ fn run_kind(
         ..NewtonOptions::default()
     };
     let t0 = Instant::now();
-    let (qoi, csv, deformed) = match kind {
+    let (qoi, csv, shape) = match kind {
         Kind::Drape => {
             let drape = Drape {
                 mesh,
@@ -217,14 +224,20 @@ fn run_kind(
                 solver,
                 ..Drape::new()
             };
-            let (s, d) = drape.run(material)?;
+            let (s, shape) = match (material, material.tri(drape.side / mesh as f64)?) {
+                (_, Some(t)) => drape.run_tri(&t).map(|(s, d)| (s, Shape::Tri(d)))?,
+                (SceneMaterial::Shell(m), None) => {
+                    drape.run(m).map(|(s, d)| (s, Shape::Shell(d)))?
+                }
+                _ => unreachable!("a triangle material has parameters"),
+            };
             let csv = format!(
                 "drop_mm,depth_mm,width_mm\n{:.4},{:.4},{:.4}\n",
                 s.drop * 1e3,
                 s.depth * 1e3,
                 s.width * 1e3
             );
-            (s.depth * 1e3, csv, d)
+            (s.depth * 1e3, csv, shape)
         }
         Kind::Frame(shear_deg) => {
             let frame = PictureFrame {
@@ -234,7 +247,13 @@ fn run_kind(
                 solver,
                 ..PictureFrame::new(0.1, shear_deg)
             };
-            let (points, d) = frame.run(material)?;
+            let (points, shape) = match (material, material.tri(frame.side / mesh as f64)?) {
+                (_, Some(t)) => frame.run_tri(&t).map(|(p, d)| (p, Shape::Tri(d)))?,
+                (SceneMaterial::Shell(m), None) => {
+                    frame.run(m).map(|(p, d)| (p, Shape::Shell(d)))?
+                }
+                _ => unreachable!("a triangle material has parameters"),
+            };
             let mut csv = String::from("shear_angle_deg,shear_force_n,axial_force_n\n");
             for p in &points {
                 let _ = writeln!(
@@ -243,7 +262,7 @@ fn run_kind(
                     p.shear_deg, p.shear_force, p.axial_force
                 );
             }
-            (points.last().map_or(0.0, |p| p.shear_force), csv, d)
+            (points.last().map_or(0.0, |p| p.shear_force), csv, shape)
         }
         Kind::Corner(stretch) => {
             let pull = CornerPull {
@@ -253,18 +272,24 @@ fn run_kind(
                 solver,
                 ..CornerPull::new(0.1, stretch / 100.0)
             };
-            let (points, d) = pull.run(material)?;
+            let (points, shape) = match (material, material.tri(pull.side / mesh as f64)?) {
+                (_, Some(t)) => pull.run_tri(&t).map(|(p, d)| (p, Shape::Tri(d)))?,
+                (SceneMaterial::Shell(m), None) => {
+                    pull.run(m).map(|(p, d)| (p, Shape::Shell(d)))?
+                }
+                _ => unreachable!("a triangle material has parameters"),
+            };
             let mut csv = String::from("displacement_mm,force_n\n");
             for p in &points {
                 let _ = writeln!(csv, "{:.4},{:.6e}", p.displacement * 1e3, p.force);
             }
-            (points.last().map_or(0.0, |p| p.force), csv, d)
+            (points.last().map_or(0.0, |p| p.force), csv, shape)
         }
     };
     Ok(Run {
         qoi,
         csv,
-        deformed,
+        shape,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -280,8 +305,16 @@ struct Choice {
 pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
     scene.check()?;
     let a = scene.args();
-    let material = load_material(&a.material).map_err(|e| e.to_string())?;
-    if let ShowScene::PictureFrame { shear_deg, .. } = &scene {
+    let material = match a.model.as_str() {
+        "kl" => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
+        m => {
+            let kind = m.parse().map_err(|e| format!("--model: {e}"))?;
+            SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
+        }
+    };
+    if let (ShowScene::PictureFrame { shear_deg, .. }, SceneMaterial::Shell(material)) =
+        (&scene, &material)
+    {
         // a sheet that follows the frame has Ẽ₁₂ = sin γ / 2 (wrinkles only relieve it)
         let e12 = shear_deg.to_radians().sin().abs() / 2.0;
         let limit = material.law.cutoffs.e12.1;
@@ -322,8 +355,8 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
                     scene.qoi_name(),
                     run.qoi,
                     run.seconds,
-                    run.deformed.counts.iterations,
-                    run.deformed.stable
+                    run.shape.counts().iterations,
+                    run.shape.stable()
                 );
                 runs.push((n, run));
             }
@@ -331,7 +364,7 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
         }
     };
     if a.verbose {
-        let c = &run.deformed.counts;
+        let c = run.shape.counts();
         eprintln!(
             "ks-fit: scene: {} solves ({} cut into sub-steps), {} iterations, {} factorisations, {} backward-Euler and {} negative-curvature steps, {} saddle escapes; {:.2} s assembling, {:.2} s factorising",
             c.steps, c.cut_steps, c.iterations, c.factorizations, c.backward_euler_steps,
@@ -344,7 +377,7 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
         "ks-fit: scene: {} on {m}x{m} ({}); stable: {}; wrote {}",
         scene.name(),
         choice.why,
-        if run.deformed.stable { "yes" } else { "NO" },
+        if run.shape.stable() { "yes" } else { "NO" },
         out.display(),
         m = choice.mesh
     );
@@ -357,7 +390,7 @@ fn choose(scene: &ShowScene, tol: f64, runs: Vec<(usize, Run)>) -> (Run, Choice)
         .iter()
         .map(|(n, r)| Level {
             mesh: (*n, *n),
-            dofs: 3 * r.deformed.x.len(),
+            dofs: 3 * r.shape.x().len(),
             seconds: r.seconds,
             qoi: r.qoi,
             diff_to_next: None,
@@ -415,8 +448,9 @@ fn write_outputs(
     seconds: f64,
 ) -> Result<(), String> {
     std::fs::create_dir_all(out).map_err(|e| format!("--out {}: {e}", out.display()))?;
-    let d = &run.deformed;
-    let surface = kshell::scene::export::sample(&d.sheet, &d.x, 4)
+    let d = &run.shape;
+    let surface = d
+        .surface()
         .map_err(|e| format!("sampling the surface: {e}"))?;
     let m = choice.mesh;
     let comment = format!(
@@ -424,11 +458,12 @@ fn write_outputs(
         scene.name(),
         scene.args().material.display()
     );
-    let c = &d.counts;
+    let c = d.counts();
     let mut toml = format!(
-        "# written by ks-fit scene {name}\nscene = \"{name}\"\nmaterial = {material:?}\nmesh = \"{m}x{m}\"\nmesh_choice = {why:?}\nqoi = {qoi_name:?}\nqoi_value = {qoi}\n",
+        "# written by ks-fit scene {name}\nscene = \"{name}\"\nmaterial = {material:?}\nmodel = {model:?}\nmesh = \"{m}x{m}\"\nmesh_choice = {why:?}\nqoi = {qoi_name:?}\nqoi_value = {qoi}\n",
         name = scene.name(),
         material = scene.args().material.display().to_string(),
+        model = scene.args().model,
         why = choice.why,
         qoi_name = scene.qoi_name(),
         qoi = run.qoi,
@@ -442,7 +477,7 @@ fn write_outputs(
     let _ = write!(
         toml,
         "stable = {}\nseconds = {:.3}\nseconds_chosen_mesh = {:.3}\nseed = {}\n\n[solver]\nstrategy = \"{}\"\nsteps = {}\ncut_steps = {}\niterations = {}\nfactorizations = {}\nbackward_euler_steps = {}\nsaddle_escapes = {}\nassembly_seconds = {:.3}\nfactor_seconds = {:.3}\n",
-        d.stable, seconds, run.seconds, scene.args().seed, scene.args().strategy.name(), c.steps, c.cut_steps, c.iterations,
+        d.stable(), seconds, run.seconds, scene.args().seed, scene.args().strategy.name(), c.steps, c.cut_steps, c.iterations,
         c.factorizations, c.backward_euler_steps, c.saddle_escapes, c.assembly_seconds,
         c.factor_seconds
     );
@@ -480,37 +515,18 @@ fn write_outputs(
     Ok(())
 }
 
-/// Samples per cage face and side of the picture's tessellation: about 128 across the sheet.
-fn samples_per_face(mesh: usize) -> usize {
-    (128 / mesh.max(1)).clamp(2, 16)
-}
-
-/// The deformed limit surface drawn on the GPU (tessellated there by the stencil kernel).
+/// The picture of a scene's final state, as PNG, and what was drawn.
 fn picture(
-    d: &Deformed,
+    d: &Shape,
     mesh: usize,
     args: &crate::render::ImageArgs,
 ) -> Result<(Vec<u8>, String), String> {
-    use kshell::render::{Renderer, Tessellation};
-    let t0 = Instant::now();
-    let renderer = Renderer::new().map_err(|e| e.to_string())?;
-    let k = samples_per_face(mesh);
-    let tess = Tessellation::new(d.sheet.model.basis.surface(), d.sheet.rest(), k)
-        .map_err(|e| e.to_string())?;
-    let image = renderer
-        .render_limit(&tess, &d.x, &args.options())
-        .map_err(|e| e.to_string())?;
+    let renderer = kshell::render::Renderer::new().map_err(|e| e.to_string())?;
+    let (image, what) = d.picture(&renderer, mesh, &args.options())?;
     let png = image.png().map_err(|e| e.to_string())?;
     Ok((
         png,
-        format!(
-            "scene.png {}x{}: {} limit samples ({k}x{k} per face) on {} in {:.2} s",
-            image.width,
-            image.height,
-            tess.num_points(),
-            renderer.adapter_name(),
-            t0.elapsed().as_secs_f64()
-        ),
+        format!("scene.png {}x{}: {what}", image.width, image.height),
     ))
 }
 
@@ -546,20 +562,12 @@ pub fn report_figures(
     let (mut figures, mut notes) = (Vec::new(), Vec::new());
     for (kind, mesh, title, what) in REPORT_MESHES {
         progress(&format!("scene {title} on {mesh}x{mesh}"));
-        let drawn = run_kind(kind, material, mesh, 8, 0, Default::default())
+        let shell = SceneMaterial::Shell(material.clone());
+        let drawn = run_kind(kind, &shell, mesh, 8, 0, Default::default())
             .map_err(|e| e.to_string())
             .and_then(|run| {
-                let d = &run.deformed;
-                let tess = kshell::render::Tessellation::new(
-                    d.sheet.model.basis.surface(),
-                    d.sheet.rest(),
-                    samples_per_face(mesh),
-                )
-                .map_err(|e| e.to_string())?;
-                let png = renderer
-                    .render_limit(&tess, &d.x, &args.options())
-                    .and_then(|i| i.png())
-                    .map_err(|e| e.to_string())?;
+                let (image, _) = run.shape.picture(&renderer, mesh, &args.options())?;
+                let png = image.png().map_err(|e| e.to_string())?;
                 Ok((run, png))
             });
         match drawn {
@@ -568,7 +576,7 @@ pub fn report_figures(
                 caption: format!(
                     "{what}; {mesh}x{mesh} mesh (fixed, no error estimate: ks-fit scene chooses and checks one), {:.1} s, equilibrium {}",
                     run.seconds,
-                    if run.deformed.stable { "stable" } else { "NOT stable" }
+                    if run.shape.stable() { "stable" } else { "NOT stable" }
                 ),
                 png,
             }),
