@@ -6,7 +6,8 @@
 
 use crate::converge::{analyse, Level};
 use crate::material::FabricMaterial;
-use crate::scene::{CantileverBend, TensileStrip};
+use crate::scene::{CantileverBend, CornerPull, PictureFrame, TensileStrip};
+use crate::solve::NewtonOptions;
 use crate::tri::file::SPRING_CURVATURE;
 use crate::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
 use std::time::Instant;
@@ -27,6 +28,23 @@ pub enum LabTest {
         width: f64,
         overhang: f64,
     },
+    /// The picture frame's shear force (N) at `shear_deg` on a square of `side` m
+    /// ([`PictureFrame`], free to wrinkle, 8 steps).
+    Frame { shear_deg: f64, side: f64 },
+    /// The corner pull's force (N) at `stretch` (a fraction of the diagonal) on a square of
+    /// `side` m ([`CornerPull`], 8 steps).
+    Corner { stretch: f64, side: f64 },
+}
+
+/// Iterations allowed per solve of a showcase scene (as `ks-fit scene`): wrinkling sheets
+/// spend long stretches in backward-Euler relaxation.
+const SCENE_ITERATIONS: usize = 500;
+
+fn scene_solver() -> NewtonOptions {
+    NewtonOptions {
+        max_iterations: SCENE_ITERATIONS,
+        ..NewtonOptions::default()
+    }
 }
 
 /// One run of one model on one mesh.
@@ -89,6 +107,9 @@ impl LabTest {
                 overhang,
                 angle_deg,
             } => CantileverBend::new(width, overhang, angle_deg).mesh,
+            LabTest::Frame { .. } => (8, 8),
+            // the clips (a tenth of the side) on cage lines
+            LabTest::Corner { .. } => (10, 10),
         };
         (0..3).map(|k| (base.0 << k, base.1 << k)).collect()
     }
@@ -115,6 +136,36 @@ impl LabTest {
                 b.mesh = mesh;
                 Ok(b.run(m).map_err(|e| e.to_string())?.drape_angle_deg)
             }
+            LabTest::Frame { .. } => {
+                let (p, _) = self.frame(mesh).run(m).map_err(|e| e.to_string())?;
+                Ok(p.last().map_or(f64::NAN, |p| p.shear_force))
+            }
+            LabTest::Corner { .. } => {
+                let (p, _) = self.corner(mesh).run(m).map_err(|e| e.to_string())?;
+                Ok(p.last().map_or(f64::NAN, |p| p.force))
+            }
+        }
+    }
+
+    fn frame(&self, mesh: (usize, usize)) -> PictureFrame {
+        let LabTest::Frame { shear_deg, side } = *self else {
+            unreachable!("a frame test")
+        };
+        PictureFrame {
+            mesh: mesh.0,
+            solver: scene_solver(),
+            ..PictureFrame::new(side, shear_deg)
+        }
+    }
+
+    fn corner(&self, mesh: (usize, usize)) -> CornerPull {
+        let LabTest::Corner { stretch, side } = *self else {
+            unreachable!("a corner-pull test")
+        };
+        CornerPull {
+            mesh: mesh.0,
+            solver: scene_solver(),
+            ..CornerPull::new(side, stretch)
         }
     }
 
@@ -140,12 +191,22 @@ impl LabTest {
                 c.mesh = mesh;
                 Ok(c.run(t).map_err(|e| e.to_string())?.drape_angle_deg)
             }
+            LabTest::Frame { .. } => {
+                let (p, _) = self.frame(mesh).run_tri(t).map_err(|e| e.to_string())?;
+                Ok(p.last().map_or(f64::NAN, |p| p.shear_force))
+            }
+            LabTest::Corner { .. } => {
+                let (p, _) = self.corner(mesh).run_tri(t).map_err(|e| e.to_string())?;
+                Ok(p.last().map_or(f64::NAN, |p| p.force))
+            }
         }
     }
 
+    /// The size across that the faces across divide (a triangle model's cell size).
     fn width(&self) -> f64 {
         match *self {
             LabTest::Tensile { width, .. } | LabTest::Bend { width, .. } => width,
+            LabTest::Frame { side, .. } | LabTest::Corner { side, .. } => side,
         }
     }
 }

@@ -13,7 +13,8 @@ pub struct RecommendArgs {
     /// --fits gives none.
     #[arg(long)]
     material: PathBuf,
-    /// The test to compare on: tensile or bend (the showcase scenes run on the shell only).
+    /// The test to compare on: tensile, bend, picture-frame or corner-pull (the drape has
+    /// several stable equilibria and no converged reference to compare against: refused).
     #[arg(long, value_parser = ["tensile", "bend", "drape", "picture-frame", "corner-pull"])]
     scene: String,
     /// Largest relative error against the converged shell accepted.
@@ -42,15 +43,21 @@ pub struct RecommendArgs {
     /// Runs per model and mesh (the median time is kept).
     #[arg(long, default_value_t = 3)]
     repeats: usize,
+    /// Picture frame: final shear angle, degrees (as `scene picture-frame`).
+    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+    shear_deg: f64,
+    /// Corner pull: final stretch of the diagonal, percent (as `scene corner-pull`).
+    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    stretch: f64,
 }
 
 /// Runs `ks-fit recommend`; `Ok(false)` when no run meets the tolerance.
 pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
-    if a.scene != "tensile" && a.scene != "bend" {
-        return Err(format!(
-            "recommend --scene {}: the triangle models do not run the showcase scenes yet, so the only candidate is the shell; `ks-fit scene {} --tol REL` picks its cheapest mesh meeting REL",
-            a.scene, a.scene
-        ));
+    if a.scene == "drape" {
+        return Err(
+            "recommend --scene drape: the drape has several stable equilibria, and its fold depth depends on the branch the sheet takes (different meshes and models fold differently), so there is no converged reference to measure a model's error against; `ks-fit scene drape --model M` runs any model"
+                .into(),
+        );
     }
     if !(a.tol > 0.0 && a.tol < 1.0) {
         return Err(format!("--tol must be in (0, 1), got {}", a.tol));
@@ -83,7 +90,29 @@ pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
             Err(format!("{name} must be a positive number of mm, got {v}"))
         }
     };
-    let test = if a.scene == "tensile" {
+    let test = if a.scene == "picture-frame" {
+        if !(a.shear_deg.is_finite() && a.shear_deg.abs() < 89.0) {
+            return Err(format!(
+                "--shear-deg must be within ±89°, got {}",
+                a.shear_deg
+            ));
+        }
+        LabTest::Frame {
+            shear_deg: a.shear_deg,
+            side: 0.1,
+        }
+    } else if a.scene == "corner-pull" {
+        if !(a.stretch > 0.0 && a.stretch <= 50.0) {
+            return Err(format!(
+                "--stretch must be a percentage in (0, 50], got {}",
+                a.stretch
+            ));
+        }
+        LabTest::Corner {
+            stretch: a.stretch / 100.0,
+            side: 0.1,
+        }
+    } else if a.scene == "tensile" {
         let width = positive("--width", a.width.unwrap_or(50.0))? * 1e-3;
         let length = positive("--length", a.length)? * 1e-3;
         let to = positive("--to", a.to.unwrap_or(0.02 * a.length))? * 1e-3;
@@ -121,6 +150,15 @@ pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
         }
         LabTest::Bend { overhang, .. } => {
             format!("drape angle at {:.2} mm overhang (deg)", overhang * 1e3)
+        }
+        LabTest::Frame { shear_deg, .. } => {
+            format!("picture frame's shear force at {shear_deg}° (N), 10 cm square")
+        }
+        LabTest::Corner { stretch, .. } => {
+            format!(
+                "corner pull's force at {} % (N), 10 cm square",
+                100.0 * stretch
+            )
         }
     };
     println!(
