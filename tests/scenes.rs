@@ -2,6 +2,9 @@
 //! outside the code: the picture frame's homogeneous shear in closed form, the work–energy
 //! balance of each scene's reported force, the drape's held corners, and the exported surface.
 
+mod common;
+
+use common::work_balances;
 use kshell::material::{parse_material, FabricMaterial};
 use kshell::scene::{export, CornerPull, Drape, PictureFrame};
 
@@ -57,20 +60,6 @@ fn the_in_plane_frame_shear_force_is_the_homogeneous_shear_in_closed_form() {
     let (again, _) = frame.run(&stiff).unwrap();
     let last = (points[3].shear_force, again[3].shear_force);
     assert!((last.0 - last.1).abs() < 1e-7 * last.0, "{last:?}");
-}
-
-/// Each scene's force is dW/dq at equilibrium, so along a continuous branch the work of the
-/// reported force (trapezoid rule over the steps) equals the change of the total energy.
-fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
-    let mut work = 0.0;
-    for k in 1..q.len() {
-        work += 0.5 * (force[k] + force[k - 1]) * (q[k] - q[k - 1]);
-    }
-    let de = energy[q.len() - 1] - energy[0];
-    assert!(
-        (work - de).abs() < 0.02 * de.abs(),
-        "{what}: work {work} J against energy change {de} J"
-    );
 }
 
 #[test]

@@ -3,6 +3,9 @@
 //! closed form (constant-strain triangles follow an affine boundary motion exactly), the
 //! work–energy balance of the reported forces, and the drape's held corners.
 
+mod common;
+
+use common::work_balances;
 use kshell::scene::{CornerPull, Drape, PictureFrame};
 use kshell::solve::NewtonOptions;
 use kshell::tri::{Stiffness, TriKind, TriMaterial};
@@ -66,19 +69,6 @@ fn the_in_plane_frame_on_every_membrane_model_is_the_homogeneous_shear() {
             );
         }
     }
-}
-
-/// Along a continuous branch the work of dW/dq (trapezoid rule over the steps) equals the
-/// change of the total energy.
-fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
-    let work: f64 = (1..q.len())
-        .map(|k| 0.5 * (force[k] + force[k - 1]) * (q[k] - q[k - 1]))
-        .sum();
-    let de = energy[q.len() - 1] - energy[0];
-    assert!(
-        (work - de).abs() < 0.02 * de.abs(),
-        "{what}: work {work} J against energy change {de} J"
-    );
 }
 
 #[test]

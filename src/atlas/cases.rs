@@ -38,6 +38,11 @@ pub enum Case {
     PictureFrame,
     /// The corner pull (Figure 5) to 10 % of the diagonal in eight steps: diagonal wrinkles.
     CornerPull,
+    /// A bias-extension sample of nearly inextensible yarns: 150 × 450 mm at 45°, a11 = a22 =
+    /// 1e10 Pa (glass or aramid weaves), G12 = 3e4 Pa, τ = 0.3 mm, pulled 20 mm in one step on
+    /// graded cages. Yarns at 45° to the cage cannot shear freely: the force locks on coarse
+    /// meshes (`paper_repro/convergence/stiff_bias`) and the solve is stiff (a11 / G12 ≈ 3e5).
+    StiffYarnBias,
 }
 
 impl Case {
@@ -56,6 +61,7 @@ impl Case {
             Case::Drape,
             Case::PictureFrame,
             Case::CornerPull,
+            Case::StiffYarnBias,
         ]
     }
 
@@ -81,6 +87,7 @@ impl Case {
             Case::Drape => "drape, 1 m sheet, corners to 60 cm".into(),
             Case::PictureFrame => "picture frame, 10 cm, sheared to 40°".into(),
             Case::CornerPull => "corner pull, 10 cm, to 10 %".into(),
+            Case::StiffYarnBias => "bias extension, stiff yarns (1e10 Pa), 150 × 450 mm".into(),
         }
     }
 
@@ -97,6 +104,7 @@ impl Case {
             Case::Drape => "drape".into(),
             Case::PictureFrame => "frame".into(),
             Case::CornerPull => "corner".into(),
+            Case::StiffYarnBias => "stiff yarns".into(),
         }
     }
 
@@ -147,8 +155,22 @@ impl Case {
         row: &mut Row,
         fallbacks: &mut Vec<SolveReport>,
     ) -> Result<(), SceneError> {
+        let mut size = (0.05, 0.075);
         let (material, angle, strains): (FabricMaterial, f64, Vec<f64>) = match *self {
             Case::BiasStiffening30 => (stiffening(), 45.0, vec![0.1, 0.2, 0.3]),
+            Case::StiffYarnBias => {
+                size = (0.15, 0.45);
+                let mut m = stiffening();
+                m.thickness = 3.0e-4;
+                m.areal_density = 0.3;
+                m.law = Orthotropic::from(OrthotropicStvk {
+                    a11: 1.0e10,
+                    a22: 1.0e10,
+                    a12: 0.0,
+                    g12: 3.0e4,
+                });
+                (m, 45.0, vec![0.02 / 0.45])
+            }
             Case::SoftShear { exponent } => {
                 let mut m = stiffening();
                 m.thickness = 5.0e-5;
@@ -171,10 +193,18 @@ impl Case {
                 (m, 90.0, vec![0.2])
             }
         };
-        let mut strip = TensileStrip::new(0.05, 0.075, angle);
-        strip.mesh = if reduced { (4, 6) } else { (16, 24) };
+        let mut strip = TensileStrip::new(size.0, size.1, angle);
+        strip.mesh = match (self, reduced) {
+            (Case::StiffYarnBias, true) => (4, 12),
+            (Case::StiffYarnBias, false) => (16, 48),
+            (_, true) => (4, 6),
+            (_, false) => (16, 24),
+        };
+        if *self == Case::StiffYarnBias {
+            strip.grading = crate::scene::STRIP_GRADING;
+        }
         strip.solver = method.options;
-        let dl: Vec<f64> = strains.iter().map(|s| s * 0.075).collect();
+        let dl: Vec<f64> = strains.iter().map(|s| s * size.1).collect();
         let curve = strip.run(&material, &dl)?;
         row.load_steps = curve.len();
         for p in curve {

@@ -75,14 +75,7 @@ impl Sheet<ShellModel> {
             Grading::UNIFORM,
         )?;
         let rest = model.basis.control_points.clone();
-        let nodes = lattice(&rest, side, n)?;
-        Ok(Self {
-            model,
-            side,
-            n,
-            nodes,
-            rest,
-        })
+        Self::from_parts(model, side, n, rest)
     }
 }
 
@@ -98,6 +91,13 @@ impl Sheet<TriModel> {
         }
         let model = TriModel::new(TriGrid::rectangle(side, side, n, n), material.clone(), 0.0);
         let rest: Vec<Vec3> = model.grid.rest.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        Self::from_parts(model, side, n, rest)
+    }
+}
+
+impl<M> Sheet<M> {
+    /// The sheet of `model`, whose nodes rest at `rest`, found on the lattice.
+    fn from_parts(model: M, side: f64, n: usize, rest: Vec<Vec3>) -> Result<Self, SceneError> {
         let nodes = lattice(&rest, side, n)?;
         Ok(Self {
             model,

@@ -92,3 +92,17 @@ pub fn screenshot(html: &Path, png: &Path, width: u32, height: u32) -> Option<Ve
     let _ = std::fs::remove_dir_all(&profile);
     Some(bytes)
 }
+
+/// A scene's force is dW/dq at equilibrium, so along a continuous branch the work of the
+/// reported force (trapezoid rule over the steps) equals the change of the total energy
+/// within 2 %.
+pub fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
+    let work: f64 = (1..q.len())
+        .map(|k| 0.5 * (force[k] + force[k - 1]) * (q[k] - q[k - 1]))
+        .sum();
+    let de = energy[q.len() - 1] - energy[0];
+    assert!(
+        (work - de).abs() < 0.02 * de.abs(),
+        "{what}: work {work} J against energy change {de} J"
+    );
+}
