@@ -126,21 +126,40 @@ pub fn tensile_base(width: f64, length: f64) -> (usize, usize) {
     }
 }
 
-/// The strip's curve on a growing ladder of meshes (from [`tensile_base`], each twice as fine
-/// as the last, graded as [`STRIP_GRADING`] unless `--grading` says otherwise), stopping as
-/// soon as one mesh's estimated relative force error ([`kshell::converge::curve_errors`]) is
-/// below `tol`, after [`TENSILE_LEVELS`] meshes, or before one of over
-/// [`TENSILE_MAX_FACES`] faces. Returns the chosen mesh's points.
+/// The shell strip's curve on the automatic mesh: [`auto_ladder`] on graded cages
+/// ([`STRIP_GRADING`] unless `--grading` says otherwise).
 pub fn auto_tensile(
     strip: &TensileStrip,
     material: &FabricMaterial,
     elongations: &[f64],
     args: &SceneArgs,
 ) -> Result<Vec<TensilePoint>, String> {
-    let tol = tensile_tol(args)?;
     let mut strip = strip.clone();
     strip.grading = args.grading.unwrap_or(STRIP_GRADING);
-    let (nx, ny) = tensile_base(strip.width, strip.length);
+    let g = strip.grading;
+    let label = format!("grading {},{}", g.across, g.along);
+    let size = (strip.width, strip.length);
+    auto_ladder(size, &label, elongations.len(), args, |mesh| {
+        let mut s = strip.clone();
+        s.mesh = mesh;
+        s.run(material, elongations).map_err(|e| e.to_string())
+    })
+}
+
+/// A strip's curve (`run` on a mesh) on a growing ladder of meshes from [`tensile_base`],
+/// each twice as fine as the last, stopping as soon as one mesh's estimated relative force
+/// error ([`kshell::converge::curve_errors`]) is below `--tol`, after [`TENSILE_LEVELS`]
+/// meshes, or before one of over [`TENSILE_MAX_FACES`] faces; the choice is said on stderr
+/// (`label` names the cages). Returns the chosen mesh's points.
+pub fn auto_ladder(
+    (width, length): (f64, f64),
+    label: &str,
+    steps: usize,
+    args: &SceneArgs,
+    run: impl Fn((usize, usize)) -> Result<Vec<TensilePoint>, String>,
+) -> Result<Vec<TensilePoint>, String> {
+    let tol = tensile_tol(args)?;
+    let (nx, ny) = tensile_base(width, length);
     let mut runs: Vec<((usize, usize), Vec<TensilePoint>)> = Vec::new();
     let mut errors = Vec::new();
     let mut stop = None;
@@ -153,12 +172,17 @@ pub fn auto_tensile(
             ));
             break;
         }
-        crate::scene::check_strip_size("the automatic mesh", mesh, elongations.len())?;
-        strip.mesh = mesh;
+        crate::scene::check_strip_size("the automatic mesh", mesh, steps)?;
         let t0 = Instant::now();
-        let points = strip
-            .run(material, elongations)
-            .map_err(|e| e.to_string())?;
+        // a finer mesh that fails ends the ladder; the first must solve
+        let points = match run(mesh) {
+            Ok(p) => p,
+            Err(e) if !runs.is_empty() => {
+                stop = Some(format!("{}x{} failed: {e}", mesh.0, mesh.1));
+                break;
+            }
+            Err(e) => return Err(e),
+        };
         if args.verbose {
             let last = points.last().map_or(0.0, |p| p.force);
             eprintln!(
@@ -202,13 +226,10 @@ pub fn auto_tensile(
         })
         .collect();
     let (mesh, points) = runs.swap_remove(i);
-    let g = strip.grading;
     eprintln!(
-        "ks-fit: tensile: mesh {}x{} (grading {},{}) chosen from {} N at the last elongation ({said})",
+        "ks-fit: tensile: mesh {}x{} ({label}) chosen from {} N at the last elongation ({said})",
         mesh.0,
         mesh.1,
-        g.across,
-        g.along,
         all.join(", ")
     );
     if args.verbose {

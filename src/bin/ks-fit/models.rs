@@ -30,18 +30,25 @@ pub fn tensile(
     args: &SceneArgs,
 ) -> Result<(), String> {
     let src = source(kind, material, "tensile")?;
-    let mut strip = TriTensile::new(w, l, angle);
-    if let Some(m) = args.mesh {
-        strip.mesh = m;
-    }
-    kshell::limits::check_mesh(
-        &format!("--mesh {}x{}", strip.mesh.0, strip.mesh.1),
-        strip.mesh.0,
-        strip.mesh.1,
-    )?;
-    strip.solver = args.solver();
-    let mat = src.material(kind, w / strip.mesh.0 as f64)?;
-    let points = strip.run(&mat, dl).map_err(|e| e.to_string())?;
+    let strip = TriTensile {
+        solver: args.solver(),
+        ..TriTensile::new(w, l, angle)
+    };
+    let run = |mesh: (usize, usize)| {
+        let mat = src.material(kind, w / mesh.0 as f64)?;
+        let strip = TriTensile {
+            mesh,
+            ..strip.clone()
+        };
+        strip.run(&mat, dl).map_err(|e| e.to_string())
+    };
+    let points = match args.mesh {
+        Some(m) => {
+            kshell::limits::check_mesh(&format!("--mesh {}x{}", m.0, m.1), m.0, m.1)?;
+            run(m)?
+        }
+        None => crate::auto::auto_ladder((w, l), kind.name(), dl.len(), args, run)?,
+    };
     println!("elongation_mm,force_n");
     let mut saddles = Vec::new();
     for p in &points {

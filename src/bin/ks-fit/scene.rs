@@ -15,8 +15,7 @@ use std::time::Instant;
 /// Options shared by the scene commands.
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Faces across × along, e.g. 8x12 (default: the automatic choice, see --tol; a
-    /// triangle model's strip keeps its own fixed mesh).
+    /// Faces across × along, e.g. 8x12 (default: the automatic choice, see --tol).
     #[arg(long, value_parser = parse_mesh)]
     pub mesh: Option<(usize, usize)>,
     /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
