@@ -121,6 +121,14 @@ fn noise_free_degree2_data_are_fitted_back() {
     let fit = doc["fit"].as_table().expect("[fit]");
     assert_eq!(fit["meshes"].as_array().unwrap().len(), 1);
     assert!(fit["objective_evaluations"].as_integer().unwrap() > 0);
+    // every Newton iteration is put down to one stage
+    let per_stage: i64 = fit["stage_iterations"]
+        .as_table()
+        .expect("[fit.stage_iterations]")
+        .values()
+        .map(|v| v.as_integer().unwrap())
+        .sum();
+    assert_eq!(per_stage, fit["newton_iterations"].as_integer().unwrap());
     let tests = fit["test"].as_array().expect("[[fit.test]]");
     let mut kinds = Vec::new();
     for t in tests {

@@ -293,11 +293,19 @@ fn timing_section(h: &mut String, r: &FitResult) {
         "<h2>Time</h2>\n<p>{:.1} s in all; {} shell evaluations, {} homogeneous-strip evaluations, {} unstable solves left out.</p>",
         r.stats.seconds, r.stats.evaluations, r.stats.bootstrap_evaluations, r.stats.unstable_solves
     );
-    h.push_str("<table><tr><th class=\"l\">stage</th><th>seconds</th></tr>\n");
+    h.push_str(
+        "<table><tr><th class=\"l\">stage</th><th>seconds</th><th>Newton iterations</th></tr>\n",
+    );
     for (stage, t) in &r.stats.stage_seconds {
+        let its = r
+            .stats
+            .stage_iterations
+            .iter()
+            .find(|e| &e.0 == stage)
+            .map_or(String::new(), |e| e.1.to_string());
         let _ = writeln!(
             h,
-            "<tr><td class=\"l\">{}</td><td>{t:.2}</td></tr>",
+            "<tr><td class=\"l\">{}</td><td>{t:.2}</td><td>{its}</td></tr>",
             escape(stage)
         );
     }

@@ -200,6 +200,11 @@ pub struct FitStats {
     pub unstable_solves: usize,
     /// (stage, seconds)
     pub stage_seconds: Vec<(String, f64)>,
+    /// (stage, Newton iterations), in the order of `stage_seconds`: where the solver's work
+    /// goes
+    pub stage_iterations: Vec<(String, usize)>,
+    /// `newton_iterations` when the last stage was timed
+    counted: usize,
 }
 
 #[derive(Clone, Debug)]
@@ -380,12 +385,22 @@ impl Fitter<'_> {
         p.iter().map(|v| v.to_bits()).collect()
     }
 
+    /// Adds the seconds since `t`, and the Newton iterations since the last stage was timed,
+    /// to `stage`.
     fn time_stage(&mut self, stage: &str, t: Instant) {
         let s = t.elapsed().as_secs_f64();
-        if let Some(e) = self.stats.stage_seconds.iter_mut().find(|e| e.0 == stage) {
+        let st = &mut self.stats;
+        let its = st.newton_iterations - st.counted;
+        st.counted = st.newton_iterations;
+        if let Some(e) = st.stage_seconds.iter_mut().find(|e| e.0 == stage) {
             e.1 += s;
         } else {
-            self.stats.stage_seconds.push((stage.to_string(), s));
+            st.stage_seconds.push((stage.to_string(), s));
+        }
+        if let Some(e) = st.stage_iterations.iter_mut().find(|e| e.0 == stage) {
+            e.1 += its;
+        } else {
+            st.stage_iterations.push((stage.to_string(), its));
         }
     }
 

@@ -102,6 +102,13 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     for (stage, t) in &r.stats.stage_seconds {
         let _ = writeln!(s, "{} = {t:.3}", toml_str(stage));
     }
+    let _ = writeln!(
+        s,
+        "\n[fit.stage_iterations]    # Newton iterations per stage"
+    );
+    for (stage, n) in &r.stats.stage_iterations {
+        let _ = writeln!(s, "{} = {n}", toml_str(stage));
+    }
     let judged = super::verdict::judge(r, r.max_error);
     for (t, judgement) in r.tests.iter().zip(&judged) {
         let _ = writeln!(s, "\n[[fit.test]]");
