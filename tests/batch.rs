@@ -149,6 +149,17 @@ fn a_library_is_fitted_side_by_side_resumed_and_summarised() {
         );
     }
 
+    // one batch per folder: a live batch's lock is respected, a dead one's taken over
+    let lock = out.join(".work/batch.lock");
+    std::fs::write(&lock, std::process::id().to_string()).unwrap();
+    let (rc, _, err) = ks_fit(&["batch", s(&manifest), "--out", s(&out)]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("another ks-fit batch (pid"), "{err}");
+    std::fs::write(&lock, "4294967295").unwrap();
+    let (rc, _, err) = ks_fit(&["batch", s(&manifest), "--out", s(&out)]);
+    assert_eq!(rc, 3, "{err}");
+    assert!(err.contains("cotton-a skipped") && !lock.exists(), "{err}");
+
     // bad flags and manifests are one-line errors with exit code 2
     let (rc, _, err) = ks_fit(&["batch", s(&manifest), "--out", s(&out), "--jobs", "0"]);
     assert_eq!(rc, 2, "{err}");

@@ -89,6 +89,11 @@ pub fn cmd_batch(a: &BatchArgs) -> Result<bool, String> {
     };
     let exe = std::env::current_exe().map_err(|e| format!("cannot find ks-fit itself: {e}"))?;
     let summary = a.task.is_none();
+    // one local batch per folder (array tasks share it by design, on disjoint fabrics)
+    let _lock = match a.task {
+        None => Some(Lock::take(&a.out)?),
+        Some(_) => None,
+    };
     let mut board = Board::new(&rows, &a.out);
     if summary {
         board.write(&a.out, &a.manifest)?;
@@ -98,6 +103,55 @@ pub fn cmd_batch(a: &BatchArgs) -> Result<bool, String> {
         board.write(&a.out, &a.manifest)?;
     }
     Ok(board.report(&chosen, a.task.is_some()))
+}
+
+/// `DIR/.work/batch.lock`, holding the pid of the batch that runs in DIR; removed on drop. A
+/// lock whose process is gone (a batch killed) is taken over.
+struct Lock(PathBuf);
+
+impl Lock {
+    fn take(out: &Path) -> Result<Lock, String> {
+        use std::io::Write;
+        let dir = out.join(".work");
+        std::fs::create_dir_all(&dir)
+            .map_err(|e| format!("{}: cannot create: {e}", dir.display()))?;
+        let path = dir.join("batch.lock");
+        for _ in 0..2 {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    let _ = write!(f, "{}", std::process::id());
+                    return Ok(Lock(path));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let pid = std::fs::read_to_string(&path).unwrap_or_default();
+                    let alive = pid.trim().parse::<u32>().is_ok_and(|p| {
+                        p != std::process::id() && Path::new(&format!("/proc/{p}")).exists()
+                    });
+                    if alive {
+                        return Err(format!(
+                            "another ks-fit batch (pid {}) is running in {}; wait for it, or remove {} if it is not",
+                            pid.trim(),
+                            out.display(),
+                            path.display()
+                        ));
+                    }
+                    let _ = std::fs::remove_file(&path);
+                }
+                Err(e) => return Err(format!("{}: cannot create: {e}", path.display())),
+            }
+        }
+        Err(format!("{}: cannot take the lock", path.display()))
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
 }
 
 /// What the batch knows of every fabric.
@@ -191,7 +245,8 @@ fn run_all(
     let next = AtomicUsize::new(0);
     let (tx, rx) = std::sync::mpsc::channel();
     let jobs = a.jobs.min(chosen.len().max(1));
-    let single = a.jobs > 1;
+    // fits side by side each take one thread; a lone fit keeps them all
+    let single = jobs > 1;
     let start = Instant::now();
     std::thread::scope(|s| -> Result<(), String> {
         for _ in 0..jobs {
