@@ -167,11 +167,23 @@ pub fn fit(
         if let Some(c) = &t.curve {
             let _ = writeln!(text, "curve = {c:?}");
         }
+        // a test that did not solve with the fitted parameters is `nan` (TOML's spelling)
+        let num = |v: f64, digits: usize| {
+            if v.is_finite() {
+                format!("{v:.digits$}")
+            } else {
+                "nan".to_string()
+            }
+        };
         if let Some(e) = t.avg_rel_error {
-            let _ = writeln!(text, "avg_rel_error = {e:.6}");
+            let _ = writeln!(text, "avg_rel_error = {}", num(e, 6));
         }
         if let Some((a, g)) = t.drape_angle_deg {
-            let _ = writeln!(text, "drape_angle_deg = {a:.4}\ntarget_drape_deg = {g}");
+            let _ = writeln!(
+                text,
+                "drape_angle_deg = {}\ntarget_drape_deg = {g}",
+                num(a, 4)
+            );
         }
         let _ = writeln!(
             text,
@@ -215,5 +227,23 @@ pub fn fit(
         r.evaluations
     );
     println!("wrote {}", out.display());
+    // a fitted test the final parameters do not solve is a failed fit, never a quiet pass
+    let unsolved: Vec<String> = r
+        .tests
+        .iter()
+        .filter(|t| {
+            t.fitted
+                && (t.avg_rel_error.is_some_and(|e| !e.is_finite())
+                    || t.drape_angle_deg.is_some_and(|(a, _)| !a.is_finite()))
+        })
+        .map(|t| format!("{} {}°", t.kind, t.angle_deg))
+        .collect();
+    if !unsolved.is_empty() {
+        println!(
+            "FIT FAILED: {} do not solve with the fitted parameters (written as nan; the law is likely degenerate there, see the [model] table)",
+            unsolved.join(", ")
+        );
+        return Ok(false);
+    }
     Ok(true)
 }

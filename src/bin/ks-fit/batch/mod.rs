@@ -278,7 +278,7 @@ fn run_all(
                         (false, true, true) => format!("fitted in {:.1} s", status.seconds),
                         (false, true, false) => {
                             format!(
-                                "fitted in {:.1} s, FIT FAILED (--max-error)",
+                                "fitted in {:.1} s, FIT FAILED (see its log)",
                                 status.seconds
                             )
                         }

@@ -100,9 +100,18 @@ fn fit_figures(material: &Path) -> FitFigures {
         })
         .filter_map(|t| t.get("avg_rel_error").and_then(|e| e.as_float()))
         .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
+    // a triangle model's fit names them `seconds` and `evaluations`
+    let either = |a: &str, b: &str| {
+        let v = num(a);
+        if v.is_empty() {
+            num(b)
+        } else {
+            v
+        }
+    };
     FitFigures {
-        wall_seconds: num("wall_seconds"),
-        evaluations: num("objective_evaluations"),
+        wall_seconds: either("wall_seconds", "seconds"),
+        evaluations: either("objective_evaluations", "evaluations"),
         newton_iterations: num("newton_iterations"),
         worst_error_pct: worst
             .map(|e| format!("{:.2}", 100.0 * e))
@@ -148,7 +157,14 @@ fn cells(out: &Path, e: &Entry) -> Vec<String> {
         return v;
     };
     let material = format!("{f}/material.toml");
-    let figures = fit_figures(&out.join(&material));
+    let mut figures = fit_figures(&out.join(&material));
+    if figures.verdict.is_empty() {
+        // no verdict in the file (a triangle model's fit): its FIT FAILED line, if any
+        let log = std::fs::read_to_string(out.join(f).join("log.txt")).unwrap_or_default();
+        if let Some(l) = log.lines().rev().find(|l| l.starts_with("FIT FAILED")) {
+            figures.verdict = l.to_string();
+        }
+    }
     let report = format!("{f}/report/index.html");
     let log = format!("{f}/log.txt");
     let has = |p: &str| out.join(p).is_file();
