@@ -448,13 +448,26 @@ fn stage(
     best
 }
 
+/// Smallest control value of a spline as a fraction of its largest: a stiffness that falls a
+/// hundredfold inside the tested range is no fabric's, and one near zero leaves a mode without
+/// stiffness (a stvk-ds fit of 4-point curves drove a shear spline's first value to 2.5e-5 N/m
+/// from about 400, and no cantilever solved after it).
+pub const SPLINE_FLOOR: f64 = 1e-2;
+
 /// Multiplies control value `j` (over the components `comps`, in order) by `f`, keeping the
-/// diagonal hinge tied to the warp and weft bending.
+/// diagonal hinge tied to the warp and weft bending and every value at least [`SPLINE_FLOOR`]
+/// of its spline's largest.
 fn scale_value(m: &mut TriMaterial, comps: &[usize], mut j: usize, f: f64) {
     for &c in comps {
         let n = m.curves[c].k.len();
         if j < n {
             m.curves[c].k[j] *= f;
+            let top = m.curves[c].k.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for v in m.curves[c].k.iter_mut() {
+                if v.abs() < SPLINE_FLOOR * top {
+                    *v = SPLINE_FLOOR * top;
+                }
+            }
             if (c == 3 || c == 4) && m.kind != TriKind::Springs {
                 tie_diagonal(m);
             }
@@ -567,4 +580,37 @@ fn report(targets: &[Target], m: &TriMaterial) -> Vec<TestFit> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tri::Stiffness;
+
+    #[test]
+    fn a_spline_value_cannot_fall_below_the_floor() {
+        let s = |k: Vec<f64>| Stiffness::spline(0.0, 0.1, k).unwrap();
+        let mut m = TriMaterial {
+            kind: TriKind::StvkDs,
+            curves: [
+                s(vec![100.0, 200.0, 400.0]),
+                Stiffness::constant(1.0),
+                Stiffness::constant(1.0),
+                Stiffness::constant(1.0),
+                Stiffness::constant(1.0),
+                Stiffness::constant(1.0),
+            ],
+            coupling: 0.0,
+            areal_density: 0.1,
+        };
+        // the first value scaled down 1e6 times stops at 1 % of the largest
+        scale_value(&mut m, &[0], 0, 1e-6);
+        assert_eq!(m.curves[0].k, vec![4.0, 200.0, 400.0]);
+        // scaling the largest up lifts the floor with it
+        scale_value(&mut m, &[0], 2, 100.0);
+        assert_eq!(m.curves[0].k, vec![400.0, 400.0, 40000.0]);
+        // an ordinary step is untouched
+        scale_value(&mut m, &[0], 1, 2.0);
+        assert_eq!(m.curves[0].k, vec![400.0, 800.0, 40000.0]);
+    }
 }
