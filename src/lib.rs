@@ -9,6 +9,7 @@
 //! | [`subdiv`] | the exact Catmull–Clark limit basis: per-point stencils for x, x_u, x_v, x_uu, x_uv, x_vv |
 //! | [`quadrature`] | Gauss–Legendre rules on faces and through the thickness |
 //! | [`dataset`] | the fabric dataset: `fabric.toml` and its CSV curves, read, checked, written |
+//! | [`shape`] | captured static shapes (OBJ) as fit targets: closest-point distances and the FFT descriptor |
 //! | [`synth`] | synthetic datasets from a material through the virtual lab |
 //! | [`io`] | safe output (temporary file and rename) and plain number printing |
 //! | [`render`] | pictures: the limit surface tessellated by a GPU kernel (`shaders/`), shaded with its yarn lines, PNG |
@@ -30,6 +31,7 @@ pub mod model;
 pub mod quadrature;
 pub mod render;
 pub mod scene;
+pub mod shape;
 pub mod shell;
 pub mod solve;
 pub mod subdiv;
