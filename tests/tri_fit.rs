@@ -79,6 +79,7 @@ fn dataset(m: &TriMaterial) -> FabricDataset {
         thickness: 2e-4,
         tensile,
         bend,
+        shapes: Vec::new(),
         known: Known::default(),
         notes: Vec::new(),
     }

@@ -16,6 +16,10 @@
 //! width_mm = 25
 //! overhang_mm = 61.0             # overhang at which the tip reaches the drape angle
 //! drape_angle_deg = 41.5         # optional, default 41.5
+//! [[shape]]                      # a captured static shape (triangle-model fits; see `shape`)
+//! scene = "picture-frame"
+//! obj = "frame-30.obj"
+//! shear_deg = 30
 //! ```
 //!
 //! A curve is CSV with the header `elongation_mm,force_n` (spaces around fields tolerated;
@@ -35,11 +39,13 @@
 
 mod curve;
 mod known;
+mod shape;
 mod write;
 
 use curve::{parse_curve, Curve};
 use known::read_known;
 use serde::Deserialize;
+pub use shape::{Descriptor, ShapeScene, ShapeTest};
 use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -65,6 +71,8 @@ struct RawDataset {
     tensile: Vec<Spanned<RawTensile>>,
     #[serde(default)]
     bend: Vec<Spanned<RawBend>>,
+    #[serde(default)]
+    shape: Vec<Spanned<shape::RawShape>>,
     known: Option<RawKnown>,
 }
 
@@ -114,6 +122,8 @@ pub struct FabricDataset {
     pub thickness: f64,
     pub tensile: Vec<TensileTest>,
     pub bend: Vec<BendTest>,
+    /// Captured static shapes (`[[shape]]`), fitted by the triangle models.
+    pub shapes: Vec<ShapeTest>,
     /// values known from elsewhere, held by the fit (`[known]`)
     pub known: Known,
     /// what the reader did to the data (averaged duplicates, units read from headers)
@@ -630,7 +640,23 @@ pub fn load_dataset_with(
             drape_angle_deg,
         });
     }
-    if tensile.is_empty() && bend.is_empty() {
+    let mut shapes = Vec::with_capacity(raw.shape.len());
+    for (i, spanned) in raw.shape.iter().enumerate() {
+        let obj = Path::new(spanned.get_ref().obj_path());
+        let dir_or_here = if dir.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            dir
+        };
+        if !allow_outside && (obj.is_absolute() || !inside(dir_or_here, obj)) {
+            return Err(t.err(
+                spanned.span(),
+                format!("shape {}: {} lies outside the dataset folder (an absolute path, `..` or a symbolic link out of it); pass --allow-outside to read it", i + 1, dir.join(obj).display()),
+            ));
+        }
+        shapes.push(shape::read_shape(&t, dir, i, spanned)?);
+    }
+    if tensile.is_empty() && bend.is_empty() && shapes.is_empty() {
         warnings.push(DatasetWarning {
             file: file.clone(),
             line: None,
@@ -645,6 +671,7 @@ pub fn load_dataset_with(
             thickness,
             tensile,
             bend,
+            shapes,
             known,
             notes,
         },

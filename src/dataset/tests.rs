@@ -429,3 +429,78 @@ fn a_bend_without_its_drape_angle_is_a_warning() {
     );
     assert!(d.notes.iter().any(|n| n.contains("no drape_angle_deg")));
 }
+
+const SQUARE_OBJ: &str = "v 0 0 0\nv 100 0 0\nv 100 100 1\nv 0 100 0\nvt 0 0\nvt 0.1 0\nvt 0.1 0.1\nvt 0 0.1\nf 1/1 2/2 3/3 4/4\n";
+
+#[test]
+fn shapes_are_read_checked_and_written_back() {
+    let shape = "\n[[shape]]\nscene = \"picture-frame\"\nobj = \"frame.obj\"\nunits = \"mm\"\nshear_deg = 30\nforce_n = 17.5\ndescriptor = \"fft\"\nmesh = 10\n";
+    let dir = folder("shape", &format!("{TOML}{shape}"), Some(CSV));
+    std::fs::write(dir.join("frame.obj"), SQUARE_OBJ).unwrap();
+    let (d, w) = load_dataset(&dir.join("fabric.toml")).unwrap();
+    assert!(w.is_empty(), "{w:?}");
+    let s = &d.shapes[0];
+    assert_eq!(
+        s.scene,
+        ShapeScene::PictureFrame {
+            side: 0.1,
+            shear_deg: 30.0
+        }
+    );
+    assert_eq!(
+        (s.descriptor, s.force, s.mesh),
+        (Descriptor::Fft, Some(17.5), Some(10))
+    );
+    assert_eq!(s.target.positions[2], [0.1, 0.1, 1e-3]);
+    assert_eq!(s.target.triangles.len(), 2);
+    // written back (OBJ in metres) and read again: the same dataset
+    let out = dir.join("copy");
+    write_dataset(&out, &d).unwrap();
+    let (e, _) = load_dataset(&out.join("fabric.toml")).unwrap();
+    assert_eq!(e.shapes, d.shapes);
+
+    // errors name the file, the line and the key
+    let bad = |tag: &str, entry: &str, obj: &str| {
+        let dir = folder(tag, &format!("{TOML}\n[[shape]]\n{entry}"), Some(CSV));
+        std::fs::write(dir.join("s.obj"), obj).unwrap();
+        load_dataset(&dir.join("fabric.toml")).unwrap_err()
+    };
+    let e = bad(
+        "shape-noshear",
+        "scene = \"picture-frame\"\nobj = \"s.obj\"\n",
+        SQUARE_OBJ,
+    );
+    assert!(e.message.contains("needs shear_deg"), "{e}");
+    assert_eq!(e.line, Some(17));
+    let e = bad(
+        "shape-scene",
+        "scene = \"roof\"\nobj = \"s.obj\"\n",
+        SQUARE_OBJ,
+    );
+    assert!(e.message.contains("scene must be"), "{e}");
+    let e = bad(
+        "shape-stretch",
+        "scene = \"picture-frame\"\nobj = \"s.obj\"\nshear_deg = 20\nstretch_pct = 5\n",
+        SQUARE_OBJ,
+    );
+    assert!(e.message.contains("stretch_pct does not apply"), "{e}");
+    assert_eq!(e.line, Some(21));
+    let e = bad(
+        "shape-novt",
+        "scene = \"corner-pull\"\nobj = \"s.obj\"\nstretch_pct = 5\ndescriptor = \"fft\"\n",
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    );
+    assert!(e.message.contains("needs material coordinates"), "{e}");
+    let e = bad(
+        "shape-badobj",
+        "scene = \"drape\"\nobj = \"s.obj\"\n",
+        "v 0 0 0\nv 1 0 0\nf 1 2 9\n",
+    );
+    assert!(e.file.ends_with("s.obj") && e.line == Some(3), "{e}");
+    let e = bad(
+        "shape-outside",
+        "scene = \"drape\"\nobj = \"../s.obj\"\n",
+        SQUARE_OBJ,
+    );
+    assert!(e.message.contains("outside the dataset folder"), "{e}");
+}

@@ -1,6 +1,6 @@
 //! Writing a dataset back: `fabric.toml` (lab units) and its curves as `elongation_mm,force_n`.
 
-use super::{FabricDataset, Role, TensileTest, CURVE_HEADER};
+use super::{FabricDataset, Role, ShapeScene, TensileTest, CURVE_HEADER};
 use std::path::Path;
 
 /// A TOML string literal.
@@ -61,6 +61,39 @@ pub fn dataset_toml(data: &FabricDataset, comment: &str) -> String {
         let _ = writeln!(s, "overhang_mm = {:?}", b.overhang * 1e3);
         let _ = writeln!(s, "drape_angle_deg = {:?}", b.drape_angle_deg);
     }
+    for sh in &data.shapes {
+        let _ = writeln!(s, "\n[[shape]]");
+        let _ = writeln!(s, "scene = {}", toml_string(sh.scene.name()));
+        let _ = writeln!(s, "obj = {}", toml_string(&sh.obj.to_string_lossy()));
+        match sh.scene {
+            ShapeScene::PictureFrame { side, shear_deg } => {
+                let _ = writeln!(s, "side_mm = {:?}\nshear_deg = {shear_deg:?}", side * 1e3);
+            }
+            ShapeScene::CornerPull { side, stretch } => {
+                let _ = writeln!(
+                    s,
+                    "side_mm = {:?}\nstretch_pct = {:?}",
+                    side * 1e3,
+                    stretch * 100.0
+                );
+            }
+            ShapeScene::Drape { side, span } => {
+                let _ = writeln!(s, "side_mm = {:?}\nspan_mm = {:?}", side * 1e3, span * 1e3);
+            }
+        }
+        if let Some(f) = sh.force {
+            let _ = writeln!(s, "force_n = {f:?}");
+        }
+        let _ = writeln!(s, "descriptor = {}", toml_string(sh.descriptor.name()));
+        match sh.role {
+            Some(Role::Fit) => s.push_str("role = \"fit\"\n"),
+            Some(Role::Validation) => s.push_str("role = \"validation\"\n"),
+            None => {}
+        }
+        if let Some(m) = sh.mesh {
+            let _ = writeln!(s, "mesh = {m}");
+        }
+    }
     s
 }
 
@@ -74,8 +107,8 @@ pub fn curve_csv(t: &TensileTest) -> String {
     s
 }
 
-/// Writes `dir/fabric.toml` and each tensile test's curve (named by [`TensileTest::curve`],
-/// relative to `dir`), creating folders as needed.
+/// Writes `dir/fabric.toml`, each tensile test's curve (named by [`TensileTest::curve`],
+/// relative to `dir`) and each shape's OBJ (in metres), creating folders as needed.
 pub fn write_dataset(dir: &Path, data: &FabricDataset) -> std::io::Result<()> {
     write_dataset_with_comment(dir, data, "")
 }
@@ -93,6 +126,13 @@ pub fn write_dataset_with_comment(
             std::fs::create_dir_all(parent)?;
         }
         crate::io::write_atomic(&p, curve_csv(t))?;
+    }
+    for sh in &data.shapes {
+        let p = dir.join(&sh.obj);
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        crate::io::write_atomic(&p, sh.target.obj())?;
     }
     crate::io::write_atomic(&dir.join("fabric.toml"), dataset_toml(data, comment))
 }

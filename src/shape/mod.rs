@@ -167,6 +167,28 @@ impl ShapeMesh {
         })
     }
 
+    /// OBJ text (metres): `v`, `vt` when there are material coordinates, `f` triangles.
+    pub fn obj(&self) -> String {
+        use std::fmt::Write;
+        let mut s = String::new();
+        for p in &self.positions {
+            let _ = writeln!(s, "v {:?} {:?} {:?}", p[0], p[1], p[2]);
+        }
+        let uv = self.uv.as_ref().ok();
+        for t in uv.into_iter().flatten() {
+            let _ = writeln!(s, "vt {:?} {:?}", t[0], t[1]);
+        }
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| i + 1);
+            if uv.is_some() {
+                let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
+            } else {
+                let _ = writeln!(s, "f {a} {b} {c}");
+            }
+        }
+        s
+    }
+
     /// From a sampled sheet (quads split along one diagonal).
     pub fn from_surface(s: &crate::scene::export::SurfaceMesh) -> Self {
         Self {

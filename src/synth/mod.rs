@@ -271,6 +271,7 @@ pub fn synthesize_with(
         thickness: lab.thickness(),
         tensile,
         bend,
+        shapes: Vec::new(),
         known: Default::default(),
         notes,
     })
