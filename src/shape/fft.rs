@@ -4,6 +4,9 @@
 //! where a wrinkle sits and to which way it bulges, and keeps it sensitive to the wrinkles'
 //! amplitude and wavelength, which is what a material determines.
 //!
+//! Only the low frequencies are compared (waves at least four grid cells long, see
+//! [`Spectrum::kept`]).
+//!
 //! The grid covers the bounding box of the mesh's (u, v) at cell centres; a grid point is
 //! interpolated linearly in the triangle of (u, v) that holds it (or, past the border, the
 //! nearest one, its weights clamped). The transform is separable, rows then columns, in
@@ -134,14 +137,29 @@ impl Spectrum {
         Ok(Self::of_grid(&resample(mesh, n)?, n))
     }
 
-    /// (self − target), coordinate by coordinate over the target's norm of that coordinate
-    /// (floored at 1e-3 of the largest), over √3: the sum of squares is the mean of the three
-    /// coordinates' squared relative errors.
+    /// Whether bin `i` (k·n + l) is one of the kept low frequencies: |k|, |l| ≤ n/4 (signed
+    /// frequencies), waves at least four cells long. Measurement noise spreads evenly over all
+    /// n² bins while a sheet's wrinkles sit in the low ones, so dropping the rest cuts the
+    /// noise's share about fourfold (a 0.05 mm noise on 1 mm frame wrinkles moved the best
+    /// shear 30 % with every bin kept).
+    pub fn kept(&self, i: usize) -> bool {
+        let n = self.n;
+        let f = |k: usize| k.min(n - k) <= n / 4;
+        f(i / n) && f(i % n)
+    }
+
+    /// (self − target) over the kept bins, coordinate by coordinate over the target's norm of
+    /// that coordinate (floored at 1e-3 of the largest), over √3: the sum of squares is the
+    /// mean of the three coordinates' squared relative errors.
     pub fn residuals(&self, target: &Spectrum) -> Vec<f64> {
-        let norms = target
-            .magnitude
-            .each_ref()
-            .map(|m| m.iter().map(|v| v * v).sum::<f64>().sqrt());
+        let norms = target.magnitude.each_ref().map(|m| {
+            m.iter()
+                .enumerate()
+                .filter(|(i, _)| self.kept(*i))
+                .map(|(_, v)| v * v)
+                .sum::<f64>()
+                .sqrt()
+        });
         let floor = 1e-3 * norms.iter().fold(0.0f64, |a, &b| a.max(b));
         let mut r = Vec::with_capacity(3 * self.n * self.n);
         for c in 0..3 {
@@ -150,7 +168,9 @@ impl Spectrum {
                 self.magnitude[c]
                     .iter()
                     .zip(&target.magnitude[c])
-                    .map(|(a, b)| (a - b) * s),
+                    .enumerate()
+                    .filter(|(i, _)| self.kept(*i))
+                    .map(|(_, (a, b))| (a - b) * s),
             );
         }
         r

@@ -13,6 +13,7 @@ pub mod jet;
 pub mod model;
 pub mod params;
 pub mod scenes;
+pub mod shape_target;
 pub mod xpbd;
 
 pub use curve::Stiffness;

@@ -107,6 +107,14 @@ pub fn cmd_fit(
     for w in &warnings {
         eprintln!("ks-fit: {w}");
     }
+    if !data.shapes.is_empty() {
+        eprintln!(
+            "ks-fit: warning: {}: {} [[shape]] entr{} left out: shapes are fitted by the triangle models (--model springs|soft-constraints|stvk-ds|xpbd), not by the shell fit",
+            file.display(),
+            data.shapes.len(),
+            if data.shapes.len() == 1 { "y" } else { "ies" }
+        );
+    }
     let mut progress = |line: &str| {
         if !quiet {
             eprintln!("ks-fit: fit: {line}");
@@ -212,6 +220,18 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
         data.tensile.len(),
         data.bend.len()
     );
+    for sh in &data.shapes {
+        println!(
+            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model), left out by the shell fit",
+            sh.scene.describe(),
+            sh.obj.display(),
+            sh.target.positions.len(),
+            sh.target.triangles.len(),
+            cell(sh.target.thinnest_spread() * 1e3, 3),
+            sh.descriptor.name(),
+            sh.force.map_or(String::new(), |f| format!(", force {f} N")),
+        );
+    }
     println!(
         "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",
         "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"

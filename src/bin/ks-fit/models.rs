@@ -158,23 +158,23 @@ pub fn fit(
     let _ = writeln!(text, "evaluations = {}", r.evaluations);
     let _ = writeln!(text, "undetermined = {:?}", r.undetermined);
     let _ = writeln!(text, "notes = {:?}", r.notes);
-    for t in &r.tests {
-        let _ = writeln!(
-            text,
-            "\n[[fit.test]]\nkind = {:?}\nangle_deg = {:?}",
-            t.kind, t.angle_deg
-        );
-        if let Some(c) = &t.curve {
-            let _ = writeln!(text, "curve = {c:?}");
+    // a test that did not solve with the fitted parameters is `nan` (TOML's spelling)
+    let num = |v: f64, digits: usize| {
+        if v.is_finite() {
+            format!("{v:.digits$}")
+        } else {
+            "nan".to_string()
         }
-        // a test that did not solve with the fitted parameters is `nan` (TOML's spelling)
-        let num = |v: f64, digits: usize| {
-            if v.is_finite() {
-                format!("{v:.digits$}")
-            } else {
-                "nan".to_string()
-            }
-        };
+    };
+    for t in &r.tests {
+        let _ = writeln!(text, "\n[[fit.test]]\nkind = {:?}", t.kind);
+        if t.angle_deg.is_finite() {
+            let _ = writeln!(text, "angle_deg = {:?}", t.angle_deg);
+        }
+        if let Some(c) = &t.curve {
+            let key = if t.shape.is_some() { "obj" } else { "curve" };
+            let _ = writeln!(text, "{key} = {c:?}");
+        }
         if let Some(e) = t.avg_rel_error {
             let _ = writeln!(text, "avg_rel_error = {}", num(e, 6));
         }
@@ -184,6 +184,19 @@ pub fn fit(
                 "drape_angle_deg = {}\ntarget_drape_deg = {g}",
                 num(a, 4)
             );
+        }
+        if let Some(s) = &t.shape {
+            let _ = writeln!(
+                text,
+                "scene = {:?}\ndescriptor = {:?}\nrms_distance_mm = {}\nshape_error = {}",
+                s.scene,
+                s.descriptor,
+                num(s.rms_distance * 1e3, 4),
+                num(s.error, 6)
+            );
+            if let Some((f, g)) = s.force {
+                let _ = writeln!(text, "force_n = {}\ntarget_force_n = {g:?}", num(f, 6));
+            }
         }
         let _ = writeln!(
             text,
@@ -206,7 +219,7 @@ pub fn fit(
         "{:<11} {:>7} {:<16} {:>14} {:>16} {:>8} {:>6}",
         "kind", "angle", "curve", "avg_rel_error", "drape_angle_deg", "mesh", "fitted"
     );
-    for t in &r.tests {
+    for t in r.tests.iter().filter(|t| t.shape.is_none()) {
         println!(
             "{:<11} {:>7.1} {:<16} {:>14} {:>16} {:>8} {:>6}",
             t.kind,
@@ -220,6 +233,7 @@ pub fn fit(
             if t.fitted { "yes" } else { "no" }
         );
     }
+    print_shapes(&r.tests);
     println!(
         "fitted {} in {:.1} s: {} objective evaluations",
         kind.name(),
@@ -234,9 +248,13 @@ pub fn fit(
         .filter(|t| {
             t.fitted
                 && (t.avg_rel_error.is_some_and(|e| !e.is_finite())
-                    || t.drape_angle_deg.is_some_and(|(a, _)| !a.is_finite()))
+                    || t.drape_angle_deg.is_some_and(|(a, _)| !a.is_finite())
+                    || t.shape.as_ref().is_some_and(|s| !s.error.is_finite()))
         })
-        .map(|t| format!("{} {}°", t.kind, t.angle_deg))
+        .map(|t| match &t.shape {
+            Some(s) => format!("shape {}", s.scene),
+            None => format!("{} {}°", t.kind, t.angle_deg),
+        })
         .collect();
     if !unsolved.is_empty() {
         println!(
@@ -246,4 +264,38 @@ pub fn fit(
         return Ok(false);
     }
     Ok(true)
+}
+
+/// The shapes' table: scene, descriptor, rms distance, the descriptor's relative error, force.
+fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
+    let shapes: Vec<_> = tests
+        .iter()
+        .filter_map(|t| t.shape.as_ref().map(|s| (t, s)))
+        .collect();
+    if shapes.is_empty() {
+        return;
+    }
+    println!(
+        "{:<34} {:<10} {:>15} {:>11} {:>20} {:>8} {:>6}",
+        "shape",
+        "descriptor",
+        "rms_distance_mm",
+        "shape_error",
+        "force_n (measured)",
+        "mesh",
+        "fitted"
+    );
+    for (t, s) in shapes {
+        println!(
+            "{:<34} {:<10} {:>15.3} {:>11} {:>20} {:>8} {:>6}",
+            s.scene,
+            s.descriptor,
+            s.rms_distance * 1e3,
+            format!("{:.2} %", 100.0 * s.error),
+            s.force
+                .map_or("-".into(), |(f, g)| format!("{f:.4} ({g:.4})")),
+            format!("{}x{}", t.mesh.0, t.mesh.1),
+            if t.fitted { "yes" } else { "no" }
+        );
+    }
 }

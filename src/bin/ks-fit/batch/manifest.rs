@@ -180,7 +180,7 @@ impl Fnv {
 }
 
 /// The fingerprint of a row's inputs: ks-fit's version, the row's options, the dataset file
-/// and every curve file it names (as far as the dataset can be read: a broken one is
+/// and every curve and shape file it names (as far as the dataset can be read: a broken one is
 /// fingerprinted by its own bytes, and its fit fails and is retried on every rerun anyway).
 pub fn inputs_hash(row: &Row) -> Result<String, String> {
     let mut h = Fnv::new();
@@ -194,9 +194,10 @@ pub fn inputs_hash(row: &Row) -> Result<String, String> {
     h.add(&bytes);
     if let Ok((data, _)) = kshell::dataset::load_dataset(&row.dataset) {
         let dir = row.dataset.parent().unwrap_or(Path::new(""));
-        for t in &data.tensile {
-            h.add(t.curve.to_string_lossy().as_bytes());
-            if let Ok(b) = std::fs::read(dir.join(&t.curve)) {
+        let files = data.tensile.iter().map(|t| &t.curve);
+        for f in files.chain(data.shapes.iter().map(|s| &s.obj)) {
+            h.add(f.to_string_lossy().as_bytes());
+            if let Ok(b) = std::fs::read(dir.join(f)) {
                 h.add(&b);
             }
         }

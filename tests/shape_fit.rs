@@ -1,0 +1,209 @@
+//! Fitting a triangle model to a captured shape (`[[shape]]`): the shear of a stvk-ds material
+//! that no strip determines (warp and weft strips and cantilevers only) comes back from the
+//! picture frame's wrinkles, whether compared by positions or by the FFT descriptor, on a
+//! target meshed differently from the model and carrying noise; and a shape the model cannot
+//! reproduce (the shell's wrinkles, another branch) is flagged, not trusted.
+
+use kshell::dataset::{
+    BendTest, Descriptor, FabricDataset, Known, ShapeScene, ShapeTest, TensileTest,
+};
+use kshell::scene::export::lattice_surface;
+use kshell::scene::PictureFrame;
+use kshell::shape::ShapeMesh;
+use kshell::tri::fit::{fit_tri, TriFitOptions, SHAPE_TRUST};
+use kshell::tri::{Stiffness, TriCantilever, TriKind, TriMaterial, TriTensile};
+use std::path::PathBuf;
+
+const SHEAR: f64 = 420.0;
+
+fn truth() -> TriMaterial {
+    let k = Stiffness::constant;
+    TriMaterial {
+        kind: TriKind::StvkDs,
+        curves: [
+            k(32_000.0),
+            k(19_000.0),
+            k(SHEAR),
+            k(2.6e-5),
+            k(1.5e-5),
+            k((2.6e-5f64 * 1.5e-5).sqrt()),
+        ],
+        coupling: 0.0,
+        areal_density: 0.1036,
+    }
+}
+
+/// Warp and weft strips (no bias) and two cantilevers made by `m` on the fit's meshes.
+fn lab(m: &TriMaterial) -> FabricDataset {
+    let mut tensile = Vec::new();
+    for angle in [90.0, 0.0] {
+        let mut s = TriTensile::new(0.05, 0.075, angle);
+        s.mesh = (8, 12);
+        let dl: Vec<f64> = (0..=10).map(|i| 3e-4 * i as f64).collect();
+        let mut force = vec![0.0];
+        force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
+        tensile.push(TensileTest::new(
+            angle,
+            0.05,
+            0.075,
+            PathBuf::from(format!("a{angle}.csv")),
+            dl,
+            force,
+        ));
+    }
+    let bend = [90.0, 0.0]
+        .map(|angle| {
+            let mut c = TriCantilever::new(0.025, 0.05, angle);
+            c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
+            BendTest {
+                angle_deg: angle,
+                width: 0.025,
+                overhang: 0.05,
+                drape_angle_deg: c.run(m).unwrap().drape_angle_deg,
+            }
+        })
+        .to_vec();
+    FabricDataset {
+        name: "frame".into(),
+        path: PathBuf::from("frame/fabric.toml"),
+        areal_density: Some(m.areal_density),
+        thickness: 2e-4,
+        tensile,
+        bend,
+        shapes: Vec::new(),
+        known: Known::default(),
+        notes: Vec::new(),
+    }
+}
+
+/// Each triangle split into four at its edges' midpoints (the same piecewise-linear surface on
+/// four times the triangles, most vertices new), every vertex moved by a pseudo-random offset
+/// of up to `noise` per coordinate: the model's surface on another mesh, as a scanner would
+/// give it.
+fn remeshed(s: &ShapeMesh, noise: f64) -> ShapeMesh {
+    let mut out = s.clone();
+    let mut uv = s.uv.clone().unwrap();
+    out.triangles.clear();
+    let mut mid = std::collections::HashMap::new();
+    for t in &s.triangles {
+        let m = [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])].map(|(a, b)| {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                out.positions
+                    .push([0, 1, 2].map(|k| 0.5 * (s.positions[a][k] + s.positions[b][k])));
+                uv.push([0, 1].map(|k| 0.5 * (uv[a][k] + uv[b][k])));
+                out.positions.len() - 1
+            })
+        });
+        out.triangles.extend([
+            [t[0], m[0], m[2]],
+            [m[0], t[1], m[1]],
+            [m[2], m[1], t[2]],
+            [m[0], m[1], m[2]],
+        ]);
+    }
+    out.uv = Ok(uv);
+    let mut seed = 11u64;
+    for p in &mut out.positions {
+        for x in p.iter_mut() {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            *x += noise * ((seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0);
+        }
+    }
+    out
+}
+
+/// The frame sheared 30° on `m`, as a remeshed, noisy target.
+fn frame_target(m: &TriMaterial, mesh: usize, noise: f64) -> ShapeMesh {
+    let frame = PictureFrame {
+        mesh,
+        ..PictureFrame::new(0.1, 30.0)
+    };
+    let (_, d) = frame.run_tri(m).unwrap();
+    remeshed(
+        &ShapeMesh::from_surface(&lattice_surface(&d.sheet, &d.x)),
+        noise,
+    )
+}
+
+fn shape(target: ShapeMesh, descriptor: Descriptor, mesh: usize) -> ShapeTest {
+    ShapeTest {
+        scene: ShapeScene::PictureFrame {
+            side: 0.1,
+            shear_deg: 30.0,
+        },
+        obj: PathBuf::from("frame.obj"),
+        target,
+        descriptor,
+        force: None,
+        role: None,
+        mesh: Some(mesh),
+    }
+}
+
+/// The shear comes back within 1 % by positions and 2 % by the FFT descriptor (measured:
+/// −0.07 % and −1.4 %; the noise flattens the spectra's misfit near the optimum), from a start
+/// that the strips' secant moduli give with no bias strip (495 N/m, on the far side of a
+/// branch switch at about 430). Noise: up to 0.05 mm per coordinate on wrinkles of about 1 mm.
+#[test]
+fn the_frame_shape_determines_the_shear_no_strip_gave() {
+    let m = truth();
+    let target = frame_target(&m, 16, 5e-5);
+    for (descriptor, tol) in [(Descriptor::Positions, 1e-2), (Descriptor::Fft, 2e-2)] {
+        let mut data = lab(&m);
+        data.shapes.push(shape(target.clone(), descriptor, 16));
+        let fit = fit_tri(&data, &TriFitOptions::new(TriKind::StvkDs), &mut |_| {}).unwrap();
+        let got = fit.material.curves[2].at(0.0).0;
+        eprintln!("{descriptor:?}: shear {got} N/m (true {SHEAR})");
+        assert!(
+            (got / SHEAR - 1.0).abs() < tol,
+            "{descriptor:?}: shear {got} vs {SHEAR}; {:?}",
+            fit.notes
+        );
+        assert!(
+            !fit.undetermined.contains(&"shear"),
+            "{:?}",
+            fit.undetermined
+        );
+        let s = fit.tests.iter().find_map(|t| t.shape.clone()).unwrap();
+        assert!(s.error < 0.1, "{s:?}");
+        assert!(
+            fit.notes.iter().all(|n| !n.contains("WARNING")),
+            "{:?}",
+            fit.notes
+        );
+    }
+}
+
+/// The shell's wrinkles on 16 × 16 settle on another branch than stvk-ds's: the fit cannot
+/// reproduce them, and says so instead of printing the shear as if it were known.
+#[test]
+fn a_shape_the_model_cannot_reproduce_is_flagged() {
+    let m = truth();
+    let shell =
+        kshell::material::load_material(std::path::Path::new("examples/materials/cotton.toml"))
+            .unwrap();
+    let frame = PictureFrame {
+        mesh: 16,
+        ..PictureFrame::new(0.1, 30.0)
+    };
+    let (_, d) = frame.run(&shell).unwrap();
+    let surface = kshell::scene::export::sample(&d.sheet, &d.x, 2).unwrap();
+    let mut data = lab(&m);
+    data.shapes.push(shape(
+        ShapeMesh::from_surface(&surface),
+        Descriptor::Positions,
+        12,
+    ));
+    let fit = fit_tri(&data, &TriFitOptions::new(TriKind::StvkDs), &mut |_| {}).unwrap();
+    let s = fit.tests.iter().find_map(|t| t.shape.clone()).unwrap();
+    assert!(s.error > SHAPE_TRUST, "{s:?}");
+    assert!(
+        fit.notes
+            .iter()
+            .any(|n| n.contains("WARNING: the model does not reproduce the shape")),
+        "{:?}",
+        fit.notes
+    );
+}
