@@ -5,9 +5,16 @@
 //! `paper_repro/models/results.md` and one SVG per test (time against error, log–log).
 //!
 //! `cargo run --release --example model_chart` (about two minutes on two cores).
+//!
+//! With `-- --fits FILE...` (materials written by `ks-fit fit --model`, one per triangle model)
+//! the triangle models run with those fitted parameters instead, into
+//! `paper_repro/models/fitted/`: what a user gets who fits each model to the same lab data
+//! (`paper_repro/models/fitted/run.sh` makes the data, the fits and the chart).
 
 use kshell::material::load_material;
 use kshell::model::compare::{compare, LabTest, Run};
+use kshell::tri::file::{model_only, parse_tri, TriSource};
+use kshell::tri::TriMaterial;
 use std::fmt::Write;
 
 const COLOURS: [(&str, &str); 5] = [
@@ -108,12 +115,50 @@ fn svg(title: &str, points: &[Run], reference: f64) -> String {
     s
 }
 
+/// The fitted triangle materials named after `--fits`.
+fn fitted_materials() -> Vec<(String, TriMaterial)> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(i) = args.iter().position(|a| a == "--fits") else {
+        return Vec::new();
+    };
+    args[i + 1..]
+        .iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(f).unwrap_or_else(|e| panic!("{f}: {e}"));
+            let kind = model_only(&text).unwrap_or_else(|| {
+                panic!("{f}: no [model] table (the output of ks-fit fit --model)")
+            });
+            let kind = kind.parse().unwrap_or_else(|e: String| panic!("{f}: {e}"));
+            match parse_tri(&text, f, kind).unwrap_or_else(|e| panic!("{e}")) {
+                TriSource::Table(t) => (f.clone(), t),
+                TriSource::Shell(_) => unreachable!("model_only said it has a [model] table"),
+            }
+        })
+        .collect()
+}
+
 fn main() {
     let m = load_material(std::path::Path::new("examples/materials/cotton.toml"))
         .expect("example material");
-    let dir = std::path::Path::new("paper_repro/models");
+    let fits = fitted_materials();
+    let fitted: Vec<TriMaterial> = fits.iter().map(|(_, t)| t.clone()).collect();
+    let dir = if fits.is_empty() {
+        std::path::PathBuf::from("paper_repro/models")
+    } else {
+        std::path::PathBuf::from("paper_repro/models/fitted")
+    };
+    let dir = dir.as_path();
     std::fs::create_dir_all(dir).expect("output folder");
-    let mut md = String::from("# Speed against accuracy across cloth models\n\nWritten by `cargo run --release --example model_chart` (2 cores; times are medians of three runs for the strips and the cantilever, one run for the scenes).\nThe example cotton (linear: a₁₁ 2e8, a₂₂ 1.2e8, G₁₂ 4e6 Pa, τ 0.18 mm) as the shell and as each\ntriangle model converted from its zero-strain moduli (`TriMaterial::equivalent`), NOT fitted:\nthe errors are discretisation plus what each model's form cannot represent of the shell.\nReference: the shell's Richardson extrapolation over its three meshes.\n");
+    let mut md = String::from("# Speed against accuracy across cloth models\n\nWritten by `cargo run --release --example model_chart` (2 cores; times are medians of three runs for the strips and the cantilever, one run for the scenes).\n");
+    if fits.is_empty() {
+        md.push_str("The example cotton (linear: a₁₁ 2e8, a₂₂ 1.2e8, G₁₂ 4e6 Pa, τ 0.18 mm) as the shell and as each\ntriangle model converted from its zero-strain moduli (`TriMaterial::equivalent`), NOT fitted:\nthe errors are discretisation plus what each model's form cannot represent of the shell.\n");
+    } else {
+        md.push_str("The example cotton (linear: a₁₁ 2e8, a₂₂ 1.2e8, G₁₂ 4e6 Pa, τ 0.18 mm) as the shell, and each\ntriangle model FITTED by `ks-fit fit --model` to the shell's synthetic lab data (`run.sh`):\nthe errors are discretisation, the fit's own error and what each model's form cannot\nrepresent of the shell. Fitted materials:\n\n");
+        for (f, t) in &fits {
+            let _ = writeln!(md, "- `{f}` ({})", t.kind.name());
+        }
+    }
+    md.push_str("Reference: the shell's Richardson extrapolation over its three meshes.\n");
     let strip = |angle_deg| LabTest::Tensile {
         angle_deg,
         width: 0.05,
@@ -163,22 +208,26 @@ fn main() {
             LabTest::Frame { .. } | LabTest::Corner { .. } => 1,
             _ => 3,
         };
-        let c = compare(&m, &[], test, repeats, &mut |line| {
+        let c = compare(&m, &fitted, test, repeats, &mut |line| {
             eprintln!("model_chart: {file}: {line}")
         });
         let (r, points) = (c.reference, &c.runs);
-        let _ = writeln!(md, "\n## {title}\n\nreference {r:.6}; chart `{file}.svg`\n\n| model | mesh | value | relative error | seconds |\n|---|---|---|---|---|");
+        let _ = writeln!(md, "\n## {title}\n\nreference {r:.6}; chart `{file}.svg`\n\n| model | parameters | mesh | value | relative error | seconds |\n|---|---|---|---|---|---|");
         for p in points {
             let _ = writeln!(
                 md,
-                "| {} | {}x{} | {:.6} | {:.2e} | {:.4} |",
+                "| {} | {} | {}x{} | {:.6} | {:.2e} | {:.4} |",
                 p.model,
+                p.params,
                 p.mesh.0,
                 p.mesh.1,
                 p.value,
                 (p.value - r).abs() / r.abs(),
                 p.seconds
             );
+        }
+        for f in &c.failures {
+            let _ = writeln!(md, "\nnot run or failed: {f}");
         }
         std::fs::write(dir.join(format!("{file}.svg")), svg(title, points, r))
             .expect("write the chart");
@@ -191,5 +240,5 @@ fn main() {
         }
     }
     std::fs::write(&path, md).expect("write the table");
-    println!("wrote paper_repro/models/results.md and five charts");
+    println!("wrote {}/results.md and five charts", dir.display());
 }

@@ -15,6 +15,7 @@
 
 pub mod distance;
 pub mod fft;
+pub mod target;
 
 use crate::Vec3;
 

@@ -19,9 +19,9 @@
 use super::curve::Stiffness;
 use super::params::{TriKind, TriMaterial, ZeroStrain};
 use super::scenes::{TriCantilever, TriTensile};
-use super::shape_target::{ShapeFit, ShapeTarget};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::{FabricDataset, Role};
+use crate::shape::target::{ShapeFit, ShapeTarget};
 use std::time::Instant;
 
 /// Fit settings.

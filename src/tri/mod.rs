@@ -13,7 +13,6 @@ pub mod jet;
 pub mod model;
 pub mod params;
 pub mod scenes;
-pub mod shape_target;
 pub mod xpbd;
 
 pub use curve::Stiffness;

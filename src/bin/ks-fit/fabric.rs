@@ -4,6 +4,7 @@
 use crate::guard::Guard;
 use kshell::io::{cell, num};
 use kshell::material::load_material;
+use kshell::shape::target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
 
 /// Highest degree of an η the fit accepts (each degree adds two parameters per direction).
@@ -109,10 +110,10 @@ pub fn cmd_fit(
     }
     if !data.shapes.is_empty() {
         eprintln!(
-            "ks-fit: warning: {}: {} [[shape]] entr{} left out: shapes are fitted by the triangle models (--model springs|soft-constraints|stvk-ds|xpbd), not by the shell fit",
+            "ks-fit: {}: {} [[shape]] entr{} predicted by the fitted shell (validation): shapes are fitted by the triangle models (--model springs|soft-constraints|stvk-ds|xpbd)",
             file.display(),
             data.shapes.len(),
-            if data.shapes.len() == 1 { "y" } else { "ies" }
+            if data.shapes.len() == 1 { "y is" } else { "ies are" }
         );
     }
     let mut progress = |line: &str| {
@@ -121,7 +122,16 @@ pub fn cmd_fit(
         }
     };
     let result = fit(&data, opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
-    let text = fit_report::fit_toml(&result, &file.display().to_string());
+    let mut text = fit_report::fit_toml(&result, &file.display().to_string());
+    let shapes = predict_shapes(&data, &result.material, &mut progress)?;
+    for (t, s) in &shapes {
+        text.push_str(&format!(
+            "\n[[fit.test]]\nkind = \"shape\"\nobj = {:?}\n{}mesh = \"{m}x{m}\"\nfitted = false\n",
+            t.test.obj.display().to_string(),
+            crate::models::shape_keys(s),
+            m = t.mesh
+        ));
+    }
     kshell::io::write_atomic(&out, text)
         .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     if let Some(r) = &report {
@@ -198,8 +208,30 @@ pub fn cmd_fit(
         result.stats.newton_iterations,
         stages.join(", ")
     );
+    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, false)).collect();
+    crate::models::print_shape_rows(&rows);
     println!("wrote {}", out.display());
     Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
+}
+
+/// Each `[[shape]]` predicted by the fitted shell on the shape's mesh (validation).
+fn predict_shapes(
+    data: &kshell::dataset::FabricDataset,
+    material: &kshell::material::FabricMaterial,
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<(ShapeTarget, ShapeFit)>, String> {
+    let mut out = Vec::new();
+    for sh in &data.shapes {
+        let t = ShapeTarget::new(sh, 1)?;
+        progress(&format!(
+            "predicting the shape {} ({})",
+            sh.obj.display(),
+            sh.scene.describe()
+        ));
+        let e = t.errors_shell(material);
+        out.push((t, e));
+    }
+    Ok(out)
 }
 
 pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {

@@ -186,17 +186,7 @@ pub fn fit(
             );
         }
         if let Some(s) = &t.shape {
-            let _ = writeln!(
-                text,
-                "scene = {:?}\ndescriptor = {:?}\nrms_distance_mm = {}\nshape_error = {}",
-                s.scene,
-                s.descriptor,
-                num(s.rms_distance * 1e3, 4),
-                num(s.error, 6)
-            );
-            if let Some((f, g)) = s.force {
-                let _ = writeln!(text, "force_n = {}\ntarget_force_n = {g:?}", num(f, 6));
-            }
+            text.push_str(&shape_keys(s));
         }
         let _ = writeln!(
             text,
@@ -266,13 +256,44 @@ pub fn fit(
     Ok(true)
 }
 
-/// The shapes' table: scene, descriptor, rms distance, the descriptor's relative error, force.
+/// The keys of one shape's `[[fit.test]]` entry after `kind` and `obj` (`nan` where the scene
+/// did not solve).
+pub fn shape_keys(s: &kshell::shape::target::ShapeFit) -> String {
+    let num = |v: f64, digits: usize| {
+        if v.is_finite() {
+            format!("{v:.digits$}")
+        } else {
+            "nan".to_string()
+        }
+    };
+    let mut text = format!(
+        "scene = {:?}\ndescriptor = {:?}\nrms_distance_mm = {}\nshape_error = {}\n",
+        s.scene,
+        s.descriptor,
+        num(s.rms_distance * 1e3, 4),
+        num(s.error, 6)
+    );
+    if let Some((f, g)) = s.force {
+        text.push_str(&format!(
+            "force_n = {}\ntarget_force_n = {g:?}\n",
+            num(f, 6)
+        ));
+    }
+    text
+}
+
 fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
-    let shapes: Vec<_> = tests
+    let rows: Vec<_> = tests
         .iter()
-        .filter_map(|t| t.shape.as_ref().map(|s| (t, s)))
+        .filter_map(|t| t.shape.as_ref().map(|s| (s, t.mesh.0, t.fitted)))
         .collect();
-    if shapes.is_empty() {
+    print_shape_rows(&rows);
+}
+
+/// The shapes' table: scene, descriptor, rms distance, the descriptor's relative error, force,
+/// mesh (faces each way), fitted.
+pub fn print_shape_rows(rows: &[(&kshell::shape::target::ShapeFit, usize, bool)]) {
+    if rows.is_empty() {
         return;
     }
     println!(
@@ -285,7 +306,7 @@ fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
         "mesh",
         "fitted"
     );
-    for (t, s) in shapes {
+    for &(s, mesh, fitted) in rows {
         println!(
             "{:<34} {:<10} {:>15.3} {:>11} {:>20} {:>8} {:>6}",
             s.scene,
@@ -294,8 +315,8 @@ fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
             format!("{:.2} %", 100.0 * s.error),
             s.force
                 .map_or("-".into(), |(f, g)| format!("{f:.4} ({g:.4})")),
-            format!("{}x{}", t.mesh.0, t.mesh.1),
-            if t.fitted { "yes" } else { "no" }
+            format!("{mesh}x{mesh}"),
+            if fitted { "yes" } else { "no" }
         );
     }
 }

@@ -1,20 +1,22 @@
-//! A captured shape (`[[shape]]` of the dataset) as residuals of the triangle-model fit: the
-//! scene it was captured in is run on the model's own sheet, and the simulated surface is
-//! compared with the captured one by the chosen descriptor ([`crate::shape`]), plus the
-//! boundary force when the lab measured it (Larionov et al. 2022 fit both).
+//! A captured shape (`[[shape]]` of the dataset) as residuals of the triangle-model fit, and
+//! as a prediction of a fitted shell: the scene it was captured in is run on the model's own
+//! sheet, and the simulated surface is compared with the captured one by the chosen
+//! descriptor ([`crate::shape`]), plus the boundary force when the lab measured it (Larionov
+//! et al. 2022 fit both). A shell's surface is its limit surface sampled 2 × 2 per face.
 //!
 //! Residuals are scaled so that a shape weighs like one fitted curve of `points` points:
 //! positions give p_i − closest(p_i) over the target's thinnest spread, times √(points / nodes),
 //! so their sum of squares is points × (rms distance / spread)²; the FFT descriptor's residuals
 //! ([`Spectrum::residuals`]) times √points; the force one relative residual.
 
-use super::TriMaterial;
 use crate::dataset::{Descriptor, Role, ShapeScene, ShapeTest};
-use crate::scene::export::lattice_surface;
-use crate::scene::{CornerPull, Drape, PictureFrame, SceneError};
+use crate::material::FabricMaterial;
+use crate::scene::export::{lattice_surface, sample, SurfaceMesh};
+use crate::scene::{CornerPull, Drape, FramePoint, PictureFrame, PullPoint, SceneError};
 use crate::shape::distance::Surface;
 use crate::shape::fft::Spectrum;
 use crate::shape::ShapeMesh;
+use crate::tri::TriMaterial;
 
 /// Grid of the FFT descriptor, cells each way.
 pub const FFT_GRID: usize = 32;
@@ -95,16 +97,52 @@ impl ShapeTarget {
 
     /// The model's final surface and boundary force.
     fn simulate(&self, m: &TriMaterial) -> Result<(ShapeMesh, Option<f64>), SceneError> {
+        self.run_scene(
+            &|f| {
+                f.run_tri(m)
+                    .map(|(p, d)| (p, lattice_surface(&d.sheet, &d.x)))
+            },
+            &|c| {
+                c.run_tri(m)
+                    .map(|(p, d)| (p, lattice_surface(&d.sheet, &d.x)))
+            },
+            &|r| r.run_tri(m).map(|d| lattice_surface(&d.1.sheet, &d.1.x)),
+        )
+    }
+
+    /// The shell's final limit surface (2 × 2 samples a face) and boundary force.
+    fn simulate_shell(&self, m: &FabricMaterial) -> Result<(ShapeMesh, Option<f64>), SceneError> {
+        self.run_scene(
+            &|f| {
+                f.run(m)
+                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, 2)?)))
+            },
+            &|c| {
+                c.run(m)
+                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, 2)?)))
+            },
+            &|r| r.run(m).and_then(|d| sample(&d.1.sheet, &d.1.x, 2)),
+        )
+    }
+
+    /// Sets up the scene and runs it by the given runner.
+    #[allow(clippy::type_complexity)]
+    fn run_scene(
+        &self,
+        frame_run: &dyn Fn(&PictureFrame) -> Result<(Vec<FramePoint>, SurfaceMesh), SceneError>,
+        corner_run: &dyn Fn(&CornerPull) -> Result<(Vec<PullPoint>, SurfaceMesh), SceneError>,
+        drape_run: &dyn Fn(&Drape) -> Result<SurfaceMesh, SceneError>,
+    ) -> Result<(ShapeMesh, Option<f64>), SceneError> {
         let (mesh, steps) = (self.mesh, self.steps);
-        let (sheet, x, force) = match self.test.scene {
+        let (surface, force) = match self.test.scene {
             ShapeScene::PictureFrame { side, shear_deg } => {
                 let frame = PictureFrame {
                     mesh,
                     steps,
                     ..PictureFrame::new(side, shear_deg)
                 };
-                let (points, d) = frame.run_tri(m)?;
-                (d.sheet, d.x, points.last().map(|p| p.shear_force))
+                let (points, s) = frame_run(&frame)?;
+                (s, points.last().map(|p| p.shear_force))
             }
             ShapeScene::CornerPull { side, stretch } => {
                 let pull = CornerPull {
@@ -112,8 +150,8 @@ impl ShapeTarget {
                     steps,
                     ..CornerPull::new(side, stretch)
                 };
-                let (points, d) = pull.run_tri(m)?;
-                (d.sheet, d.x, points.last().map(|p| p.force))
+                let (points, s) = corner_run(&pull)?;
+                (s, points.last().map(|p| p.force))
             }
             ShapeScene::Drape { side, span } => {
                 let drape = Drape {
@@ -123,11 +161,10 @@ impl ShapeTarget {
                     steps,
                     ..Drape::new()
                 };
-                let (_, d) = drape.run_tri(m)?;
-                (d.sheet, d.x, None)
+                (drape_run(&drape)?, None)
             }
         };
-        Ok((ShapeMesh::from_surface(&lattice_surface(&sheet, &x)), force))
+        Ok((ShapeMesh::from_surface(&surface), force))
     }
 
     /// Residuals (see the module doc); a failed solve gives NaN, which the minimiser rejects.
@@ -166,6 +203,16 @@ impl ShapeTarget {
 
     /// The errors of `m` on this shape (NaN where the scene does not solve).
     pub fn errors(&self, m: &TriMaterial) -> ShapeFit {
+        self.errors_of(self.simulate(m))
+    }
+
+    /// The errors of the shell material `m` on this shape, on the shape's mesh (NaN where the
+    /// scene does not solve).
+    pub fn errors_shell(&self, m: &FabricMaterial) -> ShapeFit {
+        self.errors_of(self.simulate_shell(m))
+    }
+
+    fn errors_of(&self, run: Result<(ShapeMesh, Option<f64>), SceneError>) -> ShapeFit {
         let mut out = ShapeFit {
             scene: self.test.scene.describe(),
             descriptor: self.test.descriptor.name(),
@@ -173,7 +220,7 @@ impl ShapeTarget {
             error: f64::NAN,
             force: self.test.force.map(|f| (f64::NAN, f)),
         };
-        let Ok((surface, force)) = self.simulate(m) else {
+        let Ok((surface, force)) = run else {
             return out;
         };
         let offsets = Surface::new(&self.test.target).offsets(&surface.positions);
