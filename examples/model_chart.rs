@@ -157,6 +157,7 @@ fn main() {
         for (f, t) in &fits {
             let _ = writeln!(md, "- `{f}` ({})", t.kind.name());
         }
+        md.push('\n');
     }
     md.push_str("Reference: the shell's Richardson extrapolation over its three meshes.\n");
     let strip = |angle_deg| LabTest::Tensile {
