@@ -6,7 +6,9 @@
 //!
 //! Each stage is a small damped Gauss–Newton (Levenberg–Marquardt) on the logarithms of its
 //! control values, with forward-difference Jacobians: a stage has one to five parameters and
-//! the triangle models' forward runs are cheap. Residuals are relative: a strip's force error
+//! the triangle models' forward runs are cheap. The tests of a residual, the Jacobian's
+//! columns and a scan's trials are independent runs, solved side by side and collected in
+//! order (the fit is the same to the bit on one thread). Residuals are relative: a strip's force error
 //! over the measured force (floored at 2 % of the curve's largest), a cantilever's drape-angle
 //! error over the target angle. Every fitted curve is thinned to at most
 //! [`TriFitOptions::points`] elongations.
@@ -460,17 +462,31 @@ fn shape_stage(
 /// branch stalls (a frame's positions error from stvk-ds: 5 % at the true shear, 63 % at 1.05
 /// times it, 205 % at 1.18 times, 126 % at a quarter).
 fn scan(m: &mut TriMaterial, c: usize, set: &[usize], targets: &[Target], evaluations: &mut usize) {
+    use rayon::prelude::*;
     let mut best = (cost(m, set, targets, evaluations).0, 1.0);
-    for j in (-8..=8).filter(|&j| j != 0) {
-        let f = 2f64.powf(j as f64 / 2.0);
-        let mut t = m.clone();
-        for v in t.curves[c].k.iter_mut() {
-            *v *= f;
-        }
-        if (c == 3 || c == 4) && t.kind != TriKind::Springs {
-            tie_diagonal(&mut t);
-        }
-        let (rms, _) = cost(&t, set, targets, evaluations);
+    // the trials are independent: run side by side, compared in order
+    let factors: Vec<f64> = (-8..=8)
+        .filter(|&j| j != 0)
+        .map(|j| 2f64.powf(j as f64 / 2.0))
+        .collect();
+    let trials: Vec<f64> = {
+        let m = &*m;
+        factors
+            .par_iter()
+            .map(|&f| {
+                let mut t = m.clone();
+                for v in t.curves[c].k.iter_mut() {
+                    *v *= f;
+                }
+                if (c == 3 || c == 4) && t.kind != TriKind::Springs {
+                    tie_diagonal(&mut t);
+                }
+                cost(&t, set, targets, &mut 0).0
+            })
+            .collect()
+    };
+    *evaluations += factors.len();
+    for (&f, &rms) in factors.iter().zip(&trials) {
         if rms < best.0 {
             best = (rms, f);
         }
@@ -675,15 +691,22 @@ fn levenberg_marquardt(
     for _ in 0..20 {
         let n: usize = comps.iter().map(|&c| m.curves[c].k.len()).sum();
         let h: f64 = 1e-4;
-        let mut jac = vec![vec![0.0; r.len()]; n];
-        for (j, col) in jac.iter_mut().enumerate() {
-            let mut t = m.clone();
-            scale_value(&mut t, comps, j, h.exp());
-            let (_, rt) = cost(&t, set, targets, evaluations);
-            for (a, (x, y)) in rt.iter().zip(&r).enumerate() {
-                col[a] = (x - y) / h;
-            }
-        }
+        // the Jacobian's columns are independent runs: solved side by side (a stage of one
+        // test, like a shape or a cantilever, has no other parallelism), collected in order
+        let jac: Vec<Vec<f64>> = {
+            use rayon::prelude::*;
+            let m = &*m;
+            (0..n)
+                .into_par_iter()
+                .map(|j| {
+                    let mut t = m.clone();
+                    scale_value(&mut t, comps, j, h.exp());
+                    let (_, rt) = cost(&t, set, targets, &mut 0);
+                    rt.iter().zip(&r).map(|(x, y)| (x - y) / h).collect()
+                })
+                .collect()
+        };
+        *evaluations += n;
         let mut improved = false;
         if jac.iter().flatten().any(|v| !v.is_finite()) {
             break;
