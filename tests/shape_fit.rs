@@ -4,15 +4,15 @@
 //! target meshed differently from the model and carrying noise; and a shape the model cannot
 //! reproduce (the shell's wrinkles, another branch) is flagged, not trusted.
 
-use kshell::dataset::{
-    BendTest, Descriptor, FabricDataset, Known, ShapeScene, ShapeTest, TensileTest,
-};
+mod common;
+
+use kshell::dataset::{Descriptor, FabricDataset, ShapeScene, ShapeTest};
 use kshell::scene::export::lattice_surface;
 use kshell::scene::PictureFrame;
 use kshell::shape::target::ShapeTarget;
 use kshell::shape::ShapeMesh;
 use kshell::tri::fit::{fit_tri, TriFitOptions, SHAPE_TRUST};
-use kshell::tri::{Stiffness, TriCantilever, TriKind, TriMaterial, TriTensile};
+use kshell::tri::{Stiffness, TriKind, TriMaterial};
 use std::path::PathBuf;
 
 const SHEAR: f64 = 420.0;
@@ -36,45 +36,7 @@ fn truth() -> TriMaterial {
 
 /// Warp and weft strips (no bias) and two cantilevers made by `m` on the fit's meshes.
 fn lab(m: &TriMaterial) -> FabricDataset {
-    let mut tensile = Vec::new();
-    for angle in [90.0, 0.0] {
-        let mut s = TriTensile::new(0.05, 0.075, angle);
-        s.mesh = (8, 12);
-        let dl: Vec<f64> = (0..=10).map(|i| 3e-4 * i as f64).collect();
-        let mut force = vec![0.0];
-        force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
-        tensile.push(TensileTest::new(
-            angle,
-            0.05,
-            0.075,
-            PathBuf::from(format!("a{angle}.csv")),
-            dl,
-            force,
-        ));
-    }
-    let bend = [90.0, 0.0]
-        .map(|angle| {
-            let mut c = TriCantilever::new(0.025, 0.05, angle);
-            c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
-            BendTest {
-                angle_deg: angle,
-                width: 0.025,
-                overhang: 0.05,
-                drape_angle_deg: c.run(m).unwrap().drape_angle_deg,
-            }
-        })
-        .to_vec();
-    FabricDataset {
-        name: "frame".into(),
-        path: PathBuf::from("frame/fabric.toml"),
-        areal_density: Some(m.areal_density),
-        thickness: 2e-4,
-        tensile,
-        bend,
-        shapes: Vec::new(),
-        known: Known::default(),
-        notes: Vec::new(),
-    }
+    common::tri_lab(m, &[90.0, 0.0])
 }
 
 /// Each triangle split into four at its edges' midpoints (the same piecewise-linear surface on

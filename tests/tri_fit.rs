@@ -2,10 +2,11 @@
 //! linear material of each model is fitted back to it, and `ks-fit fit --model` writes a
 //! material the lab commands read.
 
-use kshell::dataset::{BendTest, FabricDataset, Known, TensileTest};
+mod common;
+
+use kshell::dataset::FabricDataset;
 use kshell::tri::fit::{fit_tri, TriFitOptions};
-use kshell::tri::{Stiffness, TriCantilever, TriKind, TriMaterial, TriTensile};
-use std::path::PathBuf;
+use kshell::tri::{Stiffness, TriKind, TriMaterial};
 
 fn truth(kind: TriKind) -> TriMaterial {
     let k = Stiffness::constant;
@@ -31,58 +32,15 @@ fn truth(kind: TriKind) -> TriMaterial {
     }
 }
 
-/// Strips of 50 × 75 mm at 90°, 0° and 45° pulled to 3 mm and two 25 mm cantilevers, made by
-/// `m` on the meshes the fit uses (8 faces across a strip; cantilevers on twice the default).
+/// Strips at 90°, 0° and 45° (springs: the yarn directions only) and two cantilevers made by
+/// `m` on the meshes the fit uses (`common::tri_lab`).
 fn dataset(m: &TriMaterial) -> FabricDataset {
-    let mut tensile = Vec::new();
     let angles: &[f64] = if m.kind == TriKind::Springs {
         &[90.0, 0.0]
     } else {
         &[90.0, 0.0, 45.0]
     };
-    for &angle in angles {
-        let mut s = TriTensile::new(0.05, 0.075, angle);
-        s.mesh = (8, 12);
-        let dl: Vec<f64> = (0..=10).map(|i| 3e-4 * i as f64).collect();
-        let mut force = vec![0.0];
-        force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
-        tensile.push(TensileTest {
-            angle_deg: angle,
-            width: 0.05,
-            gauge_length: 0.075,
-            curve: PathBuf::from(format!("a{angle}.csv")),
-            elongation: dl,
-            force,
-            role: None,
-            toe: None,
-            force_scale: 1.0,
-            columns: None,
-            suspect_kn: false,
-        });
-    }
-    let mut bend = Vec::new();
-    for angle in [90.0, 0.0] {
-        let mut c = TriCantilever::new(0.025, 0.05, angle);
-        c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
-        let r = c.run(m).unwrap();
-        bend.push(BendTest {
-            angle_deg: angle,
-            width: 0.025,
-            overhang: 0.05,
-            drape_angle_deg: r.drape_angle_deg,
-        });
-    }
-    FabricDataset {
-        name: "made".into(),
-        path: PathBuf::from("made/fabric.toml"),
-        areal_density: Some(m.areal_density),
-        thickness: 2e-4,
-        tensile,
-        bend,
-        shapes: Vec::new(),
-        known: Known::default(),
-        notes: Vec::new(),
-    }
+    common::tri_lab(m, angles)
 }
 
 /// Every component the data determine comes back within 0.5 %, from a start that the data's

@@ -106,3 +106,52 @@ pub fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
         "{what}: work {work} J against energy change {de} J"
     );
 }
+
+/// Strips of 50 × 75 mm at `angles` pulled to 3 mm (8 × 12 faces) and a warp and a weft
+/// cantilever 25 × 50 mm (twice the default mesh), made by the triangle material `m` on the
+/// meshes its fit uses: a dataset whose truth is known.
+pub fn tri_lab(m: &kshell::tri::TriMaterial, angles: &[f64]) -> kshell::dataset::FabricDataset {
+    use kshell::dataset::{BendTest, FabricDataset, TensileTest};
+    use kshell::tri::{TriCantilever, TriTensile};
+    let tensile = angles
+        .iter()
+        .map(|&angle| {
+            let mut s = TriTensile::new(0.05, 0.075, angle);
+            s.mesh = (8, 12);
+            let dl: Vec<f64> = (0..=10).map(|i| 3e-4 * i as f64).collect();
+            let mut force = vec![0.0];
+            force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
+            TensileTest::new(
+                angle,
+                0.05,
+                0.075,
+                PathBuf::from(format!("a{angle}.csv")),
+                dl,
+                force,
+            )
+        })
+        .collect();
+    let bend = [90.0, 0.0]
+        .map(|angle| {
+            let mut c = TriCantilever::new(0.025, 0.05, angle);
+            c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
+            BendTest {
+                angle_deg: angle,
+                width: 0.025,
+                overhang: 0.05,
+                drape_angle_deg: c.run(m).unwrap().drape_angle_deg,
+            }
+        })
+        .to_vec();
+    FabricDataset {
+        name: "made".into(),
+        path: PathBuf::from("made/fabric.toml"),
+        areal_density: Some(m.areal_density),
+        thickness: 2e-4,
+        tensile,
+        bend,
+        shapes: Vec::new(),
+        known: Default::default(),
+        notes: Vec::new(),
+    }
+}
