@@ -185,8 +185,8 @@ impl Fitter<'_> {
         self.bending = Some(b);
         let msg = format!(
             "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
-            level.0,
-            level.1,
+            self.bend_level(level).0,
+            self.bend_level(level).1,
             b.warp,
             b.weft,
             b.twist,

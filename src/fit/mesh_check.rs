@@ -455,8 +455,13 @@ impl Fitter<'_> {
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
+        let own = if self.prep.strips.iter().any(|s| s.refine > 0) {
+            " (and every strip refined on its own mesh once more)"
+        } else {
+            ""
+        };
         let line = format!(
-            "{}mesh check: refining {}x{} to {}x{} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit, {how}){law}",
+            "{}mesh check: refining {}x{} to {}x{}{own} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit, {how}){law}",
             if bad { "warning: " } else { "" },
             last.0,
             last.1,

@@ -9,6 +9,7 @@
 //!   start of every shell stage;
 //! - `mesh_check`: how much refining the last level would change the fit (also the ladder's
 //!   test of whether the next level is needed);
+//! - `refine`: each test's own mesh, doubled until its estimated error meets its tolerance;
 //! - `thickness`: the thickness from the bends;
 //! - `validation`: predictions at the nominal angle, the misalignment diagnostic, the notes on
 //!   what the data determine;
@@ -45,6 +46,7 @@ mod mesh_check;
 pub mod optim;
 pub mod plausible;
 pub mod preprocess;
+mod refine;
 pub mod report;
 mod rigs;
 mod stages;
@@ -64,6 +66,7 @@ use nalgebra::DMatrix;
 use optim::{Evaluation, Method};
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
+pub use refine::TestMeshes;
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -121,6 +124,9 @@ pub struct FitOptions {
     /// Cage grading of every strip ([`crate::scene::STRIP_GRADING`] by default: the bias
     /// strips' forces converge at order 2 on it, 1.2 on uniform cages).
     pub grading: crate::mesh::Grading,
+    /// Each strip refined on its own until its mesh error meets its tolerance, or every strip
+    /// on the ladder's level ([`TestMeshes`]).
+    pub test_meshes: TestMeshes,
 }
 
 impl Default for FitOptions {
@@ -146,6 +152,7 @@ impl Default for FitOptions {
             bending: BendingMode::Auto,
             mesh_check: MeshCheckMode::default(),
             grading: crate::scene::STRIP_GRADING,
+            test_meshes: TestMeshes::Own,
         }
     }
 }
@@ -295,6 +302,14 @@ fn mean_abs_finite(r: &[f64]) -> f64 {
     mean_abs(&ok)
 }
 
+/// Whether the data determine a parameter (unknown names count as determined).
+fn is_determined(uncertainty: &[uncertainty::ParamError], name: &str) -> bool {
+    uncertainty
+        .iter()
+        .find(|e| e.name == name)
+        .is_none_or(|e| e.determined)
+}
+
 /// The fitter's working state.
 struct Fitter<'a> {
     data: &'a FabricDataset,
@@ -323,6 +338,10 @@ struct Fitter<'a> {
     /// the refit change the ladder measured at its last level when it stopped there (the
     /// finer level solved): the final mesh check, measured rather than estimated
     ladder_check: Option<MeshCheck>,
+    /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
+    bend_refine: u32,
+    /// every strip on the ladder's level whatever its own refinement (cheap diagnostics)
+    ladder_meshes: bool,
     /// strips already set up, warm
     rigs: HashMap<RigKey, StripRig>,
     /// node forces already predicted, by strip and parameter bits
@@ -549,6 +568,8 @@ pub fn fit(
         stage_errors: Vec::new(),
         linearised: Vec::new(),
         ladder_check: None,
+        bend_refine: 0,
+        ladder_meshes: false,
         rigs: Default::default(),
         predictions: Default::default(),
     };
@@ -579,31 +600,41 @@ pub fn fit(
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
     let meshes = ladder::ladder(&mut f, &maps, &strips, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
+    let own_meshes = opts.test_meshes == TestMeshes::Own;
+    if own_meshes && refine::refine_tests(&mut f, &maps, &strips, last)? {
+        // the ladder's measured check was made on the meshes before the per-test refinement
+        f.ladder_check = None;
+    }
     let t0 = Instant::now();
-    let tests = validation::outcomes(&mut f, last)?;
-    let identifiability = validation::identifiability(&f, &strips);
-    let uncertainty = f.final_uncertainty();
-    f.time_stage("report", t0);
-    let t0 = Instant::now();
+    let mut uncertainty = f.final_uncertainty();
     let mesh_check = if opts.mesh_check != MeshCheckMode::Off {
-        let determined = |name: &str| {
-            uncertainty
-                .iter()
-                .find(|e| e.name == name)
-                .is_none_or(|e| e.determined)
-        };
-        let check = match f.ladder_check.take() {
+        let mut check = match f.ladder_check.take() {
             Some(m) => Some(m),
-            None => f.mesh_check(last, opts.mesh_check, &determined)?,
+            None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
         };
-        if let Some(m) = &check {
-            f.mesh_check_notes(last, m);
-        }
         f.time_stage("mesh check", t0);
+        // a fit the check fails refines the strips of the stages it would move, then is
+        // checked again
+        while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
+            if !refine::refine_for_check(&mut f, &maps, &strips, last, m)? {
+                break;
+            }
+            let t0 = Instant::now();
+            uncertainty = f.final_uncertainty();
+            check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
+            f.time_stage("mesh check", t0);
+        }
         check
     } else {
         None
     };
+    let t0 = Instant::now();
+    let tests = validation::outcomes(&mut f, last)?;
+    let identifiability = validation::identifiability(&f, &strips);
+    if let Some(m) = &mesh_check {
+        f.mesh_check_notes(last, m);
+    }
+    f.time_stage("report", t0);
     let t0 = Instant::now();
     if f.stats.unstable_solves > 0 {
         let n = f.stats.unstable_solves;

@@ -68,6 +68,8 @@ pub struct Strip {
     pub curves: Vec<usize>,
     /// elongations the model is solved at (increasing, the last the largest measured)
     pub nodes: Vec<f64>,
+    /// times this strip's mesh is doubled beyond the ladder's level ([`super::refine`])
+    pub refine: u32,
 }
 
 /// The dataset's curves and strips.
@@ -367,6 +369,7 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
                     length,
                     curves: Vec::new(),
                     nodes: Vec::new(),
+                    refine: 0,
                 });
                 strips.len() - 1
             }

@@ -43,6 +43,7 @@ impl Fitter<'_> {
         angle: f64,
         level: (usize, usize),
     ) -> Result<(RigKey, StripRig), FitError> {
+        let level = self.strip_level(s, level);
         let strip = &self.prep.strips[s];
         let key = (
             [

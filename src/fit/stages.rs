@@ -314,7 +314,19 @@ impl Fitter<'_> {
         }
         let angles: Vec<String> = strips
             .iter()
-            .map(|&s| format!("{}°", self.prep.strips[s].angle_deg))
+            .map(|&s| {
+                let strip = &self.prep.strips[s];
+                if strip.refine == 0 {
+                    format!("{}°", strip.angle_deg)
+                } else {
+                    let m = super::rigs::strip_mesh(
+                        self.strip_level(s, level),
+                        strip.width,
+                        strip.length,
+                    );
+                    format!("{}° on its own {}x{}", strip.angle_deg, m.0, m.1)
+                }
+            })
             .collect();
         let msg = format!(
             "{} stage ({}, {ncurves} curves), degree {}, mesh {}×{}: rms relative error {:.3} % (shape error {:.3} %) after {} iterations, {} evaluations, {} Newton iterations ({})",

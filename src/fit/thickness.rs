@@ -40,7 +40,7 @@ impl Fitter<'_> {
             .iter()
             .map(|b| {
                 let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-                bend.mesh = bend_mesh(level, b);
+                bend.mesh = bend_mesh(self.bend_level(level), b);
                 bend.solver.rtol = super::FIT_RTOL;
                 bend.solver.strategy = self.opts.strategy;
                 BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
@@ -144,8 +144,8 @@ impl Fitter<'_> {
         self.thickness = tau;
         let msg = format!(
             "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
-            level.0,
-            level.1,
+            self.bend_level(level).0,
+            self.bend_level(level).1,
             tau * 1e3,
             100.0 * (rep.objective / bends.len() as f64).sqrt(),
             rep.evaluations,

@@ -184,22 +184,24 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
         let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
         let strip = &f.prep.strips[curve.strip];
-        let mesh = super::rigs::strip_mesh(last, strip.width, strip.length);
+        let mesh =
+            super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
         let mesh_error = coarse.as_ref().map(|nodes| {
             let rough = f.curve_forces(c, &nodes[curve.strip]);
-            let d: Vec<f64> = model.iter().zip(&rough).map(|(a, b)| (a - b) / a).collect();
-            mean_abs_finite(&d) / (2f64.powf(order) - 1.0)
+            super::refine::curve_mesh_error(&model, &rough, order)
         });
         if let Some(m) = mesh_error {
-            if m > (err / 3.0).max(3e-3) {
+            if m > super::refine::mesh_tolerance(err) {
                 f.notes.push(format!(
-                    "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %: refine the ladder (--mesh-ladder)",
+                    "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %, after {} of at most {} doublings of its own mesh: refine the ladder (--mesh-ladder)",
                     t.curve.display(),
                     curve.angle_deg,
                     100.0 * m,
                     mesh.0,
                     mesh.1,
-                    100.0 * err
+                    100.0 * err,
+                    strip.refine,
+                    super::refine::MAX_DOUBLINGS
                 ));
             }
         }
@@ -209,7 +211,11 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
                 "report: misalignment diagnostic of {}",
                 t.curve.display()
             ));
-            if let Some(d) = f.misalignment(c, f.opts.ladder[0]) {
+            // a diagnostic: on the first level's strips, whatever this one's own mesh
+            f.ladder_meshes = true;
+            let found = f.misalignment(c, f.opts.ladder[0]);
+            f.ladder_meshes = false;
+            if let Some(d) = found {
                 let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
                 misalign = Some(d);
                 aligned = Some(e);
@@ -269,7 +275,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         f.bend_angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.mesh = super::thickness::bend_mesh(last, b);
+            bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
             let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
                 stage: format!("predicting the {}° cantilever", b.angle_deg),
                 source,

@@ -202,7 +202,12 @@ pub fn cmd_fit(
             .iter()
             .map(|m| format!("{}x{}", m.0, m.1))
             .collect::<Vec<_>>()
-            .join(" → "),
+            .join(" → ")
+            + if result.notes.iter().any(|n| n.starts_with("per-test mesh:")) {
+                " (some tests refined on meshes of their own)"
+            } else {
+                ""
+            },
         result.stats.seconds,
         result.stats.evaluations,
         result.stats.newton_iterations,

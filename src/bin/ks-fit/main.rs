@@ -259,6 +259,13 @@ enum Command {
         /// accurate on the same mesh, at order 2 instead of 1.2.
         #[arg(long, value_parser = parse_grading, default_value = "0.8,0.8")]
         grading: kshell::mesh::Grading,
+        /// Each test's mesh: `own` (after the ladder, every strip whose estimated mesh error is
+        /// above a third of its fit error and 0.3 % is refined, faces doubled across and along,
+        /// at most twice, and its stage refitted; so are the strips of a stage that the mesh
+        /// check would move by 1 % or more) or `ladder` (every strip on the ladder's last level).
+        /// `[[fit.test]]` mesh names each test's real mesh.
+        #[arg(long, value_enum, default_value = "own")]
+        test_meshes: kshell::fit::TestMeshes,
         /// Cloth model fitted: kl (the subdivision shell, everything above applies), or a
         /// triangle model (springs, soft-constraints, stvk-ds, xpbd), fitted in Miguel et al.
         /// 2012's staged order on 16-faces-wide strips (default output
@@ -450,6 +457,7 @@ fn main() -> ExitCode {
             bending,
             mesh_check,
             grading,
+            test_meshes,
             model: _,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
@@ -468,6 +476,7 @@ fn main() -> ExitCode {
             bending,
             mesh_check,
             grading,
+            test_meshes,
             ..opts
         })
         .and_then(|opts| {

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 /// Manifest columns passed to `ks-fit fit` as `--name value` (underscores become hyphens).
-pub const FIT_COLUMNS: [&str; 15] = [
+pub const FIT_COLUMNS: [&str; 16] = [
     "model",
     "max_degree",
     "degree",
@@ -22,6 +22,7 @@ pub const FIT_COLUMNS: [&str; 15] = [
     "bending",
     "mesh_check",
     "grading",
+    "test_meshes",
 ];
 
 /// Largest manifest read, bytes (a library of a million fabrics is well under it).

@@ -29,7 +29,7 @@ pub struct BatchArgs {
     /// The manifest: CSV with the columns `fabric` (the fabric's folder name under --out) and
     /// `dataset` (its fabric.toml, relative to the manifest's folder), then any of the fit
     /// options model, max_degree, degree, mesh_ladder, method, protocol, toe, repeat,
-    /// max_misalign, nodes, max_error, strategy, bending, mesh_check, grading (an empty cell
+    /// max_misalign, nodes, max_error, strategy, bending, mesh_check, grading, test_meshes (an empty cell
     /// keeps the default). Lines starting with # are comments.
     manifest: PathBuf,
     /// Output folder: one folder per fabric, summary.csv and index.html.
