@@ -294,6 +294,7 @@ mod tests {
                 length: 0.075,
                 curves: vec![0],
                 nodes: elong.clone(),
+                refine: 0,
             }],
             notes: Vec::new(),
         };
