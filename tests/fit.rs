@@ -82,6 +82,10 @@ fn noise_free_degree2_data_are_fitted_back() {
         // the material bends as the paper's model does: one thickness for both bends
         "--bending",
         "paper",
+        // the data were made on this mesh, so that a perfect fit exists there: refining a
+        // strip on its own would fit the data's mesh error (each_test_is_refined_… below)
+        "--test-meshes",
+        "ladder",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
     assert!(err.contains("warp stage"), "progress on stderr: {err}");
@@ -274,6 +278,9 @@ fn bending_of_its_own_fits_both_drapes_where_one_thickness_cannot() {
             "--protocol",
             "paper",
             "--quiet",
+            // data made on this mesh (see noise_free_degree2_data_are_fitted_back)
+            "--test-meshes",
+            "ladder",
         ];
         if let Some(m) = mode {
             args.extend(["--bending", m]);
@@ -547,17 +554,19 @@ fn the_ladder_refines_only_what_the_refit_check_says_changes() {
     );
 }
 
-/// Each test's mesh is its own (issue "real lab data", item 8): noise-free data made on graded
-/// 32 × 48 strips, twice as fine as anything the fit reaches by its ladder, from a linear
-/// material, fitted from a 4 × 6 ladder. On the ladder's mesh alone the 45° strip is far from
-/// converged and G12 comes out about 26 % low (measured); with each strip refined until its
-/// estimated mesh error meets its tolerance (0.3 % here, the fit errors being tiny), G12, the
-/// yarns' a·τ and the thickness come back within 1 % and the mesh check passes.
+/// Each test's mesh is its own (issue "real lab data", item 8), on data the fit did not make
+/// from a material it does not start near (issue "a material you can trust", item 4): stiff
+/// yarns over a soft shear (a11/G12 = 1000, 10 and 50 times the fit's start), the dataset's
+/// measured thickness twice the true one, noise-free strips made on graded 32 × 48 cages, fitted
+/// from a 4 × 6 ladder. On the ladder's mesh alone the locked 45° strip drives G12 to about 1 %
+/// of the truth (measured: 9.2e3 Pa); with each strip refined until its estimate meets its
+/// tolerance or its budget (the 45° strip to 32 × 48, where its estimate, 2.5 %, is still
+/// warned about), a11·τ, a22·τ, G12 and the thickness come back within 1 % (measured: 0.2 %).
 #[test]
 fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     let dir = folder("fit-own-meshes");
-    let material = dir.join("linear.toml");
-    let truth = "name = \"linear\"\nareal_density_g_m2 = 103.6\nthickness_mm = 0.18\na11_pa = 2.0e8\na22_pa = 1.2e8\ng12_pa = 4.0e6\n";
+    let material = dir.join("stiff-yarns.toml");
+    let truth = "name = \"stiff-yarns\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 1.0e9\na22_pa = 3.0e8\ng12_pa = 1.0e6\n";
     std::fs::write(&material, truth).unwrap();
     let data = dir.join("data");
     let (rc, out, err) = ks_fit(&[
@@ -574,11 +583,19 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
         "0.8,0.8",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
+    let fabric = data.join("fabric.toml");
+    let text = std::fs::read_to_string(&fabric).unwrap();
+    assert!(text.contains("thickness_mm = 0.3\n"), "{text}");
+    std::fs::write(
+        &fabric,
+        text.replace("thickness_mm = 0.3\n", "thickness_mm = 0.6\n"),
+    )
+    .unwrap();
     let fit = |meshes: &str| {
         let fitted = dir.join(format!("{meshes}.toml"));
         let (rc, out, err) = ks_fit(&[
             "fit",
-            s(&data.join("fabric.toml")),
+            s(&fabric),
             "-o",
             s(&fitted),
             "--mesh-ladder",
@@ -600,9 +617,9 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     };
     let value = |t: &toml::Table, k: &str| t[k].as_float().unwrap();
     let (ladder, _) = fit("ladder");
-    let g12 = value(&ladder, "g12_pa") / 4.0e6 - 1.0;
+    let g12 = value(&ladder, "g12_pa") / 1.0e6 - 1.0;
     assert!(
-        g12 < -0.1,
+        g12 < -0.5,
         "on 4 × 6 alone G12 is {:+.2} % off",
         100.0 * g12
     );
@@ -611,11 +628,11 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
         out.contains("some tests refined on meshes of their own"),
         "{out}"
     );
-    let tau = value(&own, "thickness_mm") / 0.18;
+    let tau = value(&own, "thickness_mm") / 0.3;
     for (name, rel) in [
-        ("g12_pa", value(&own, "g12_pa") / 4.0e6),
-        ("a11·τ", value(&own, "a11_pa") / 2.0e8 * tau),
-        ("a22·τ", value(&own, "a22_pa") / 1.2e8 * tau),
+        ("g12_pa", value(&own, "g12_pa") / 1.0e6),
+        ("a11·τ", value(&own, "a11_pa") / 1.0e9 * tau),
+        ("a22·τ", value(&own, "a22_pa") / 3.0e8 * tau),
         ("thickness", tau),
     ] {
         assert!(
@@ -624,18 +641,30 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
             100.0 * (rel - 1.0)
         );
     }
+    // every fitted strip meets its tolerance on its own mesh, which [[fit.test]] names, or is
+    // warned about by name
     let f = own["fit"].as_table().unwrap();
-    assert!(f["mesh_change"].as_float().unwrap() < 0.01);
-    // every strip meets its tolerance on its own mesh, which [[fit.test]] names
-    for t in f["test"].as_array().unwrap() {
-        if t["kind"].as_str() == Some("bend") {
+    let notes: Vec<&str> = f["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n.as_str())
+        .collect();
+    for t in f["test"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_table().unwrap())
+    {
+        if t["kind"].as_str() != Some("tensile") {
             continue;
         }
-        let (err, est) = (
-            value(t.as_table().unwrap(), "avg_rel_error"),
-            value(t.as_table().unwrap(), "mesh_error_est"),
-        );
-        assert!(est <= (err / 3.0).max(3e-3), "{t:?}");
+        let (err, est) = (value(t, "avg_rel_error"), value(t, "mesh_error_est"));
+        let curve = t["curve"].as_str().unwrap();
+        let warned = notes
+            .iter()
+            .any(|n| n.starts_with("warning:") && n.contains(curve) && n.contains("mesh error"));
+        assert!(est <= (err / 3.0).max(3e-3) || warned, "{t:?}");
         if t["angle_deg"].as_float() == Some(45.0) {
             assert_eq!(t["mesh"].as_str(), Some("32x48"), "{t:?}");
         }
