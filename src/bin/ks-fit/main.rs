@@ -433,8 +433,16 @@ fn main() -> ExitCode {
             output,
             quiet,
             model,
+            max_error,
             ..
-        } if model != "kl" => models::fit(&file, output.as_deref(), &model, quiet, force),
+        } if model != "kl" => models::fit(
+            &file,
+            output.as_deref(),
+            &model,
+            quiet,
+            force,
+            max_error / 100.0,
+        ),
         Command::Fit {
             file,
             output,

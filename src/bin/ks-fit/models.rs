@@ -115,13 +115,16 @@ pub fn bend(
 }
 
 /// `ks-fit fit DATA --model M` for a triangle model: writes the `[model]` table and a `[fit]`
-/// table of how well it reproduces every test, prints the per-test table.
+/// table of how well it reproduces every test, prints the per-test table; a fitted test that
+/// does not solve, or whose error exceeds `max_error` (fraction; see
+/// `kshell::tri::fit::verdict`), fails the fit (`Ok(false)`: exit 3).
 pub fn fit(
     file: &Path,
     output: Option<&Path>,
     model: &str,
     quiet: bool,
     force: bool,
+    max_error: f64,
 ) -> Result<bool, String> {
     use kshell::tri::fit::{fit_tri, TriFitOptions};
     use std::fmt::Write;
@@ -177,6 +180,14 @@ pub fn fit(
         }
         if let Some(e) = t.avg_rel_error {
             let _ = writeln!(text, "avg_rel_error = {}", num(e, 6));
+        }
+        if let Some((s, e)) = t.scale {
+            let _ = writeln!(
+                text,
+                "repeat_scale = {}\navg_rel_error_scaled = {}",
+                num(s, 6),
+                num(e, 6)
+            );
         }
         if let Some((a, g)) = t.drape_angle_deg {
             let _ = writeln!(
@@ -250,6 +261,15 @@ pub fn fit(
         println!(
             "FIT FAILED: {} do not solve with the fitted parameters (written as nan; the law is likely degenerate there, see the [model] table)",
             unsolved.join(", ")
+        );
+        return Ok(false);
+    }
+    let over = kshell::tri::fit::verdict::over(&r.tests, max_error);
+    if !over.is_empty() {
+        println!(
+            "FIT FAILED: fitted tests above --max-error {:.1} %: {} (repeats are judged after their own force scale)",
+            100.0 * max_error,
+            over.join(", ")
         );
         return Ok(false);
     }

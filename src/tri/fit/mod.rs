@@ -28,6 +28,7 @@ use std::time::Instant;
 
 mod minimise;
 mod shapes;
+pub mod verdict;
 
 pub use minimise::SPLINE_FLOOR;
 use minimise::{cost, levenberg_marquardt, stage};
@@ -68,6 +69,9 @@ pub struct TestFit {
     pub curve: Option<String>,
     /// Mean |relative force error| over the curve's points (tensile).
     pub avg_rel_error: Option<f64>,
+    /// The curve's own force scale (measured ≈ s·model) and its mean |relative error| after it
+    /// (tensile; [`verdict::repeat_scale`]).
+    pub scale: Option<(f64, f64)>,
     /// (simulated, target) drape angle, degrees (bend).
     pub drape_angle_deg: Option<(f64, f64)>,
     pub mesh: (usize, usize),
@@ -492,6 +496,7 @@ fn report(targets: &[Target], m: &TriMaterial, shapes_fitted: bool) -> Vec<TestF
                     avg_rel_error: Some(
                         r.iter().map(|v| v.abs()).sum::<f64>() / force.len() as f64,
                     ),
+                    scale: verdict::repeat_scale(&r),
                     drape_angle_deg: None,
                     mesh: strip.mesh,
                     fitted: *fitted,
@@ -505,6 +510,7 @@ fn report(targets: &[Target], m: &TriMaterial, shapes_fitted: bool) -> Vec<TestF
                     angle_deg: bend.angle_deg,
                     curve: None,
                     avg_rel_error: None,
+                    scale: None,
                     drape_angle_deg: Some((sim, *angle)),
                     mesh: bend.mesh,
                     fitted: true,
@@ -516,6 +522,7 @@ fn report(targets: &[Target], m: &TriMaterial, shapes_fitted: bool) -> Vec<TestF
                 angle_deg: f64::NAN,
                 curve: Some(s.test.obj.display().to_string()),
                 avg_rel_error: None,
+                scale: None,
                 drape_angle_deg: None,
                 mesh: (s.mesh, s.mesh),
                 fitted: shapes_fitted && s.fitted(),
