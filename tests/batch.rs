@@ -61,7 +61,7 @@ fn summary(out: &Path) -> Vec<csv::StringRecord> {
     let mut r = csv::Reader::from_reader(text.as_bytes());
     assert_eq!(
         r.headers().unwrap().iter().collect::<Vec<_>>().join(","),
-        "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error"
+        "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error,worst_shape_error_pct"
     );
     r.records().map(|r| r.unwrap()).collect()
 }

@@ -66,6 +66,8 @@ struct FitFigures {
     worst_error_pct: String,
     /// the fit's verdict line
     verdict: String,
+    /// largest `shape_error` of a captured shape, fitted or predicted, percent
+    worst_shape_error_pct: String,
 }
 
 fn fit_figures(material: &Path) -> FitFigures {
@@ -100,6 +102,15 @@ fn fit_figures(material: &Path) -> FitFigures {
         })
         .filter_map(|t| t.get("avg_rel_error").and_then(|e| e.as_float()))
         .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
+    let worst_shape = fit
+        .get("test")
+        .and_then(|t| t.as_array())
+        .into_iter()
+        .flatten()
+        .filter_map(|t| t.as_table())
+        .filter(|t| t.get("kind").and_then(|k| k.as_str()) == Some("shape"))
+        .filter_map(|t| t.get("shape_error").and_then(|e| e.as_float()))
+        .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
     // a triangle model's fit names them `seconds` and `evaluations`
     let either = |a: &str, b: &str| {
         let v = num(a);
@@ -121,11 +132,14 @@ fn fit_figures(material: &Path) -> FitFigures {
             .and_then(|v| v.as_str())
             .unwrap_or_default()
             .to_string(),
+        worst_shape_error_pct: worst_shape
+            .map(|e| format!("{:.2}", 100.0 * e))
+            .unwrap_or_default(),
     }
 }
 
 /// The header of `summary.csv`.
-pub const SUMMARY_HEADER: &str = "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error";
+pub const SUMMARY_HEADER: &str = "fabric,status,passed,seconds,wall_seconds,objective_evaluations,newton_iterations,worst_curve_error_pct,verdict,warnings,material,report,log,error,worst_shape_error_pct";
 
 /// One summary row per fabric: (row, its status if it has one).
 pub struct Entry<'a> {
@@ -153,7 +167,7 @@ fn cells(out: &Path, e: &Entry) -> Vec<String> {
     };
     let Some(s) = e.status.as_ref().filter(|_| !e.running) else {
         let mut v = vec![f.clone(), state];
-        v.resize(14, String::new());
+        v.resize(15, String::new());
         return v;
     };
     let material = format!("{f}/material.toml");
@@ -191,6 +205,7 @@ fn cells(out: &Path, e: &Entry) -> Vec<String> {
         if has(&report) { report } else { String::new() },
         if has(&log) { log } else { String::new() },
         s.error.clone(),
+        figures.worst_shape_error_pct,
     ]
 }
 
@@ -219,7 +234,7 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
             .count(),
     );
     let mut h = format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"/><title>{t}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;text-align:left}}.failed{{background:#fdd}}.false{{background:#ffe8c0}}</style></head>\n<body><h1>{t}</h1>\n<p>{n} fabrics: {done} fitted, {failed} failed, {rest} to go. Written by ks-fit batch; summary.csv holds the same table.</p>\n<table>\n<tr><th>fabric</th><th>status</th><th>passed</th><th>seconds</th><th>evaluations</th><th>Newton iterations</th><th>worst curve error (%)</th><th>verdict</th><th>warnings</th><th>outputs</th><th>error</th></tr>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"/><title>{t}</title>\n<style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}td,th{{border:1px solid #bbb;padding:4px 8px;text-align:left}}.failed{{background:#fdd}}.false{{background:#ffe8c0}}</style></head>\n<body><h1>{t}</h1>\n<p>{n} fabrics: {done} fitted, {failed} failed, {rest} to go. Written by ks-fit batch; summary.csv holds the same table.</p>\n<table>\n<tr><th>fabric</th><th>status</th><th>passed</th><th>seconds</th><th>evaluations</th><th>Newton iterations</th><th>worst curve error (%)</th><th>worst shape error (%)</th><th>verdict</th><th>warnings</th><th>outputs</th><th>error</th></tr>\n",
         t = escape(title),
         n = entries.len(),
         rest = entries.len() - done - failed,
@@ -241,7 +256,7 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
         let _ = std::fmt::Write::write_fmt(
             &mut h,
             format_args!(
-                "<tr{class}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}{}{}</td><td>{}</td></tr>\n",
+                "<tr{class}><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}{}{}</td><td>{}</td></tr>\n",
                 escape(&c[0]),
                 escape(&c[1]),
                 escape(&c[2]),
@@ -249,6 +264,7 @@ pub fn summary_html(out: &Path, entries: &[Entry], title: &str) -> String {
                 escape(&c[5]),
                 escape(&c[6]),
                 escape(&c[7]),
+                escape(&c[14]),
                 escape(&c[8]),
                 escape(&c[9]),
                 link(&c[11], "report"),
@@ -303,5 +319,19 @@ mod tests {
         assert_eq!(&rec[13], "x/fabric.toml:3: bad \"value\", here");
         let html = summary_html(Path::new("/nonexistent"), &entries, "t <1>");
         assert!(html.contains("t &lt;1&gt;") && html.contains("class=\"failed\""));
+    }
+
+    #[test]
+    fn the_worst_curve_counts_fitted_curves_and_the_worst_shape_every_shape() {
+        let dir = std::env::temp_dir().join(format!("kshell-summary-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let material = dir.join("material.toml");
+        let text = "[fit]\nseconds = 2.0\n\n[[fit.test]]\nkind = \"tensile\"\navg_rel_error = 0.02\n\n[[fit.test]]\nkind = \"validation\"\navg_rel_error = 0.3\nused_in_fit = false\n\n[[fit.test]]\nkind = \"shape\"\nshape_error = 0.125\nfitted = false\n\n[[fit.test]]\nkind = \"shape\"\nshape_error = 0.05\nfitted = true\n";
+        std::fs::write(&material, text).unwrap();
+        let f = fit_figures(&material);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(f.worst_error_pct, "2.00");
+        assert_eq!(f.worst_shape_error_pct, "12.50");
+        assert_eq!(f.wall_seconds, "2");
     }
 }
