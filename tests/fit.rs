@@ -32,7 +32,17 @@ fn synth_degree2(dir: &std::path::Path, points: &str) -> std::path::PathBuf {
 }
 
 fn synth(dir: &std::path::Path, material_text: &str, points: &str) -> std::path::PathBuf {
-    let material = dir.join("degree2.toml");
+    synth_on(dir, material_text, points, "8x12")
+}
+
+/// As [`synth`], the strips on graded `mesh` cages.
+fn synth_on(
+    dir: &std::path::Path,
+    material_text: &str,
+    points: &str,
+    mesh: &str,
+) -> std::path::PathBuf {
+    let material = dir.join("material.toml");
     std::fs::write(&material, material_text).unwrap();
     let data = dir.join("data");
     let (rc, out, err) = ks_fit(&[
@@ -44,7 +54,7 @@ fn synth(dir: &std::path::Path, material_text: &str, points: &str) -> std::path:
         "--points",
         points,
         "--mesh",
-        "8x12",
+        mesh,
         "--grading",
         "0.8,0.8",
     ]);
@@ -565,24 +575,8 @@ fn the_ladder_refines_only_what_the_refit_check_says_changes() {
 #[test]
 fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     let dir = folder("fit-own-meshes");
-    let material = dir.join("stiff-yarns.toml");
     let truth = "name = \"stiff-yarns\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 1.0e9\na22_pa = 3.0e8\ng12_pa = 1.0e6\n";
-    std::fs::write(&material, truth).unwrap();
-    let data = dir.join("data");
-    let (rc, out, err) = ks_fit(&[
-        "synth",
-        "--material",
-        s(&material),
-        "--out",
-        s(&data),
-        "--points",
-        "5",
-        "--mesh",
-        "32x48",
-        "--grading",
-        "0.8,0.8",
-    ]);
-    assert_eq!(rc, 0, "{out}{err}");
+    let data = synth_on(&dir, truth, "5", "32x48");
     let fabric = data.join("fabric.toml");
     let text = std::fs::read_to_string(&fabric).unwrap();
     assert!(text.contains("thickness_mm = 0.3\n"), "{text}");

@@ -96,14 +96,8 @@ impl Fitter<'_> {
             for &c in &strip.curves {
                 let model = self.curve_forces(c, &fine[s]);
                 let coarse = self.curve_forces(c, &rough[s]);
-                let err: Vec<f64> = self.prep.curves[c]
-                    .points
-                    .iter()
-                    .zip(&model)
-                    .map(|(m, q)| (q - m.1) / m.1)
-                    .collect();
                 let estimate = curve_mesh_error(&model, &coarse, order);
-                let tolerance = mesh_tolerance(mean_abs_finite(&err));
+                let tolerance = mesh_tolerance(self.curve_fit_error(c, &model));
                 if estimate / tolerance > worst.estimate / worst.tolerance {
                     worst = StripCheck {
                         estimate,

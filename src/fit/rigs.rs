@@ -201,6 +201,18 @@ impl Fitter<'_> {
             .collect()
     }
 
+    /// Mean |relative error| of curve `c`'s measured points against its `model` forces (NaN
+    /// model forces, saddles, left out).
+    pub(super) fn curve_fit_error(&self, c: usize, model: &[f64]) -> f64 {
+        let r: Vec<f64> = self.prep.curves[c]
+            .points
+            .iter()
+            .zip(model)
+            .map(|(m, q)| (q - m.1) / m.1)
+            .collect();
+        super::mean_abs_finite(&r)
+    }
+
     /// A curve's model forces at its points, interpolated from its strip's node forces.
     /// The model's force at every measured point of curve `c`, interpolated from the node
     /// forces: NaN where the interpolation uses a node with no force (a saddle, see

@@ -12,7 +12,7 @@
 //! strips.
 
 use super::map::A12Rule;
-use super::{mean_abs_finite, FitError, Fitter, TestOutcome};
+use super::{FitError, Fitter, TestOutcome};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
 
@@ -28,13 +28,7 @@ impl Fitter<'_> {
         let s = self.prep.curves[c].strip;
         let node = self.predict(s, angle, level)?;
         let model = self.curve_forces(c, &node);
-        let r: Vec<f64> = self.prep.curves[c]
-            .points
-            .iter()
-            .zip(&model)
-            .map(|(m, q)| (q - m.1) / m.1)
-            .collect();
-        Ok((mean_abs_finite(&r), model))
+        Ok((self.curve_fit_error(c, &model), model))
     }
 
     /// The misalignment Δθ ∈ [−m, m] (m = `max_misalign_deg`) that best explains curve `c`:

@@ -89,28 +89,29 @@ fn fit_figures(material: &Path) -> FitFigures {
             })
             .unwrap_or_default()
     };
-    let worst = fit
-        .get("test")
-        .and_then(|t| t.as_array())
-        .into_iter()
-        .flatten()
-        .filter_map(|t| t.as_table())
-        .filter(|t| {
+    // the largest `key` of the [[fit.test]] entries that `keep` keeps
+    let largest = |keep: &dyn Fn(&toml::Table) -> bool, key: &str| {
+        fit.get("test")
+            .and_then(|t| t.as_array())
+            .into_iter()
+            .flatten()
+            .filter_map(|t| t.as_table())
+            .filter(|t| keep(t))
+            .filter_map(|t| t.get(key).and_then(|e| e.as_float()))
+            .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))))
+    };
+    let worst = largest(
+        &|t| {
             t.get("used_in_fit")
                 .and_then(|u| u.as_bool())
                 .unwrap_or(true)
-        })
-        .filter_map(|t| t.get("avg_rel_error").and_then(|e| e.as_float()))
-        .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
-    let worst_shape = fit
-        .get("test")
-        .and_then(|t| t.as_array())
-        .into_iter()
-        .flatten()
-        .filter_map(|t| t.as_table())
-        .filter(|t| t.get("kind").and_then(|k| k.as_str()) == Some("shape"))
-        .filter_map(|t| t.get("shape_error").and_then(|e| e.as_float()))
-        .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
+        },
+        "avg_rel_error",
+    );
+    let worst_shape = largest(
+        &|t| t.get("kind").and_then(|k| k.as_str()) == Some("shape"),
+        "shape_error",
+    );
     // a triangle model's fit names them `seconds` and `evaluations`
     let either = |a: &str, b: &str| {
         let v = num(a);
