@@ -40,7 +40,7 @@ value() { awk -v k="$2" '$1 == k && $2 == "=" { print $3; exit }' "$1"; }
   echo "|---|---|---|---|---|---|---|---|---|"
   for m in near far; do
     $bin synth --material "$tmp/$m.toml" --out "$tmp/$m" --points 5 --mesh 32x48 \
-      --grading 0.8,0.8 2> /dev/null
+      --grading 0.8,0.8 > /dev/null 2>&1
     tau=$(value "$tmp/$m.toml" thickness_mm)
     if [ $m = far ]; then
       sed -i 's/^thickness_mm = 0.3$/thickness_mm = 0.6/' "$tmp/$m/fabric.toml"
