@@ -175,6 +175,18 @@ impl Fitter<'_> {
         // every evaluation's variables and residuals, for the shape error at the optimum
         let mut seen = super::uncertainty::Seen::new();
         let mut problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+            // a point already solved (the start, evaluated for the mapped steps and then by the
+            // minimiser) is not solved again
+            if let Some((_, r, j)) = seen
+                .iter()
+                .rev()
+                .find(|(x, _, j)| x == q && (j.is_some() || !jac))
+            {
+                return Ok(Evaluation {
+                    residuals: r.clone(),
+                    jacobian: if jac { j.clone() } else { None },
+                });
+            }
             let mut law = base.clone();
             map.decode(q, &mut law);
             let (mut r, mut j) = (Vec::new(), Vec::new());
@@ -222,7 +234,9 @@ impl Fitter<'_> {
             stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
             source,
         };
-        let r0 = problem(&p, false).map_err(fail)?.residuals;
+        // with sensitivities: the strips' parameter tangents then predict the first trial's
+        // equilibria, and the minimiser's first evaluation is this one
+        let r0 = problem(&p, true).map_err(fail)?.residuals;
         let flat: Vec<usize> = curves.iter().flatten().copied().collect();
         let mut shell = |q: &[f64]| problem(q, false).ok().map(|e| e.residuals);
         let m = mapped_start(prep, &base, tau, map, &flat, &mut p, r0, 8, &mut shell);
