@@ -353,6 +353,7 @@ mod tests {
             tests: Vec::new(),
             max_error: 0.1,
             mesh_check: None,
+            shapes_fitted: false,
         };
         let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
         let fig = Figure {

@@ -49,6 +49,7 @@ pub mod preprocess;
 mod refine;
 pub mod report;
 mod rigs;
+pub mod shapes;
 mod stages;
 mod surrogate;
 mod thickness;
@@ -234,6 +235,8 @@ pub struct FitResult {
     pub max_error: f64,
     /// how much one more mesh refinement would change the fit (`None`: not run)
     pub mesh_check: Option<MeshCheck>,
+    /// whether the captured shapes that shear the sheet fitted G12 ([`shapes`])
+    pub shapes_fitted: bool,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -600,6 +603,16 @@ pub fn fit(
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
     let meshes = ladder::ladder(&mut f, &maps, &strips, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
+    // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist
+    // follows the new shear, so the bending (or thickness) stage runs again
+    let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
+    if shapes_fitted {
+        if f.own_bending {
+            f.bending_stage(&data.bend, last)?;
+        } else if !data.bend.is_empty() && known.thickness.is_none() {
+            f.thickness_stage(&data.bend, last)?;
+        }
+    }
     let own_meshes = opts.test_meshes == TestMeshes::Own;
     if own_meshes && refine::refine_tests(&mut f, &maps, &strips, last)? {
         // the ladder's measured check was made on the meshes before the per-test refinement
@@ -657,5 +670,6 @@ pub fn fit(
         tests,
         max_error: opts.max_error,
         mesh_check,
+        shapes_fitted,
     })
 }

@@ -579,7 +579,8 @@ pub(super) fn bootstrap_all(
         f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
         let g12 = f.law.g12;
         f.notes.push(format!(
-            "shear not fitted (no off-axis test): linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa"
+            "{}: linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa",
+            super::shapes::SHEAR_ASSUMED
         ));
     }
     f.time_stage("bootstrap", t0);

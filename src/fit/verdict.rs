@@ -207,6 +207,7 @@ mod tests {
             tests,
             max_error: 0.1,
             mesh_check: None,
+            shapes_fitted: false,
         }
     }
 

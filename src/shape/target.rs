@@ -21,6 +21,9 @@ use crate::tri::TriMaterial;
 /// Grid of the FFT descriptor, cells each way.
 pub const FFT_GRID: usize = 32;
 
+/// Samples of the shell's limit surface along each face edge.
+const SHELL_SAMPLES: usize = 2;
+
 /// A captured shape prepared for the fit.
 #[derive(Clone, Debug)]
 pub struct ShapeTarget {
@@ -115,13 +118,16 @@ impl ShapeTarget {
         self.run_scene(
             &|f| {
                 f.run(m)
-                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, 2)?)))
+                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, SHELL_SAMPLES)?)))
             },
             &|c| {
                 c.run(m)
-                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, 2)?)))
+                    .and_then(|(p, d)| Ok((p, sample(&d.sheet, &d.x, SHELL_SAMPLES)?)))
             },
-            &|r| r.run(m).and_then(|d| sample(&d.1.sheet, &d.1.x, 2)),
+            &|r| {
+                r.run(m)
+                    .and_then(|d| sample(&d.1.sheet, &d.1.x, SHELL_SAMPLES))
+            },
         )
     }
 
@@ -169,12 +175,31 @@ impl ShapeTarget {
 
     /// Residuals (see the module doc); a failed solve gives NaN, which the minimiser rejects.
     pub fn residuals(&self, m: &TriMaterial) -> Vec<f64> {
-        let nodes = (self.mesh + 1) * (self.mesh + 1);
+        self.residuals_of(self.simulate(m), 1)
+    }
+
+    /// The residuals of the shell material `m` on this shape, on the shape's mesh.
+    pub fn residuals_shell(&self, m: &FabricMaterial) -> Vec<f64> {
+        self.residuals_of(self.simulate_shell(m), SHELL_SAMPLES)
+    }
+
+    /// Whether the scene exercises the in-plane shear (the frame and the corner pull).
+    pub fn shears(&self) -> bool {
+        self.exercised().contains(&2)
+    }
+
+    /// The residuals of a simulated surface with `per_face` samples along each face edge.
+    fn residuals_of(
+        &self,
+        run: Result<(ShapeMesh, Option<f64>), SceneError>,
+        per_face: usize,
+    ) -> Vec<f64> {
+        let nodes = (per_face * self.mesh + 1).pow(2);
         let len = match &self.spectrum {
             Some(s) => 3 * (0..FFT_GRID * FFT_GRID).filter(|&i| s.kept(i)).count(),
             None => 3 * nodes,
         } + usize::from(self.test.force.is_some());
-        let Ok((surface, force)) = self.simulate(m) else {
+        let Ok((surface, force)) = run else {
             return vec![f64::NAN; len];
         };
         let mut r = match &self.spectrum {

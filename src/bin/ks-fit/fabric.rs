@@ -110,7 +110,7 @@ pub fn cmd_fit(
     }
     if !data.shapes.is_empty() {
         eprintln!(
-            "ks-fit: {}: {} [[shape]] entr{} predicted by the fitted shell (validation): shapes are fitted by the triangle models (--model springs|soft-constraints|stvk-ds|xpbd)",
+            "ks-fit: {}: {} [[shape]] entr{} predicted by the fitted shell (validation), except that a picture-frame or corner-pull shape fits G12 where no off-axis strip does; the triangle models (--model springs|soft-constraints|stvk-ds|xpbd) fit the components no lab test determines",
             file.display(),
             data.shapes.len(),
             if data.shapes.len() == 1 { "y is" } else { "ies are" }
@@ -124,11 +124,14 @@ pub fn cmd_fit(
     let result = fit(&data, opts, &mut progress).map_err(|e| format!("fit failed: {e}"))?;
     let mut text = fit_report::fit_toml(&result, &file.display().to_string());
     let shapes = predict_shapes(&data, &result.material, &mut progress)?;
+    // the shapes the shell fit fitted G12 to (see kshell::fit::shapes)
+    let fitted = |t: &ShapeTarget| result.shapes_fitted && t.fitted() && t.shears();
     for (t, s) in &shapes {
         text.push_str(&format!(
-            "\n[[fit.test]]\nkind = \"shape\"\nobj = {:?}\n{}mesh = \"{m}x{m}\"\nfitted = false\n",
+            "\n[[fit.test]]\nkind = \"shape\"\nobj = {:?}\n{}mesh = \"{m}x{m}\"\nfitted = {}\n",
             t.test.obj.display().to_string(),
             crate::models::shape_keys(s),
+            fitted(t),
             m = t.mesh
         ));
     }
@@ -213,13 +216,14 @@ pub fn cmd_fit(
         result.stats.newton_iterations,
         stages.join(", ")
     );
-    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, false)).collect();
+    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
     crate::models::print_shape_rows(&rows);
     println!("wrote {}", out.display());
     Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
 }
 
-/// Each `[[shape]]` predicted by the fitted shell on the shape's mesh (validation).
+/// Each `[[shape]]` simulated with the fitted shell on the shape's mesh: a prediction
+/// (validation), or the fitted shape's errors at the fit.
 fn predict_shapes(
     data: &kshell::dataset::FabricDataset,
     material: &kshell::material::FabricMaterial,
@@ -259,7 +263,7 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     );
     for sh in &data.shapes {
         println!(
-            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model), left out by the shell fit",
+            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model); the shell fit fits G12 to a frame or corner-pull shape where no off-axis strip does, and predicts it otherwise",
             sh.scene.describe(),
             sh.obj.display(),
             sh.target.positions.len(),
