@@ -45,19 +45,7 @@ impl Fitter<'_> {
     ) -> Result<(RigKey, StripRig), FitError> {
         let level = self.strip_level(s, level);
         let strip = &self.prep.strips[s];
-        let key = (
-            [
-                strip.width.to_bits(),
-                strip.length.to_bits(),
-                angle.to_bits(),
-            ],
-            level,
-            strip
-                .nodes
-                .iter()
-                .map(|e| e.to_bits())
-                .collect::<Vec<u64>>(),
-        );
+        let key = self.rig_key(s, angle, level);
         if let Some(rig) = self.rigs.remove(&key) {
             return Ok((key, rig));
         }
@@ -88,6 +76,20 @@ impl Fitter<'_> {
             rig.warm_from(other);
         }
         Ok((key, rig))
+    }
+
+    /// The cache key of strip `s` cut at `angle` on the mesh of `level` (the strip's own).
+    pub(super) fn rig_key(&self, s: usize, angle: f64, level: (usize, usize)) -> RigKey {
+        let strip = &self.prep.strips[s];
+        (
+            [
+                strip.width.to_bits(),
+                strip.length.to_bits(),
+                angle.to_bits(),
+            ],
+            level,
+            strip.nodes.iter().map(|e| e.to_bits()).collect(),
+        )
     }
 
     pub(super) fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {

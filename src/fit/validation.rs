@@ -85,7 +85,7 @@ impl Fitter<'_> {
         let nodes = self.predict_many(&jobs, level)?;
         let material = self.material();
         let mut checks = Vec::new();
-        for strip in &self.prep.strips {
+        for (s, strip) in self.prep.strips.iter().enumerate() {
             let mut mids = Vec::new();
             let mut prev = 0.0;
             for &e in &strip.nodes {
@@ -98,10 +98,15 @@ impl Fitter<'_> {
             t.solver.max_iterations = 500;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
-            let rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
+            let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
             })?;
+            // started between the node equilibria just solved with the same material
+            let key = self.rig_key(s, strip.angle_deg, self.strip_level(s, level));
+            if let Some(nodes) = self.rigs.get(&key) {
+                rig.warm_between(nodes);
+            }
             checks.push((mids, rig));
         }
         let solved: Vec<_> = checks

@@ -306,6 +306,51 @@ impl StripRig {
         true
     }
 
+    /// Takes as warm starts, where the two rigs share the mesh and the clamps, the equilibria
+    /// of `other` (solved with the same material) interpolated linearly in the elongation
+    /// between its two nearest points (the rest state below its first): a first-order start
+    /// for points between another rig's, such as the fitter's interpolation check halfway
+    /// between its nodes. Returns whether they were taken.
+    pub fn warm_between(&mut self, other: &StripRig) -> bool {
+        let same = self.length == other.length
+            && self.model.basis.control_points == other.model.basis.control_points
+            && self.bottom_fixed == other.bottom_fixed
+            && self.top_fixed == other.top_fixed
+            && other.equilibria.iter().all(Option::is_some);
+        if !same || other.elongations.is_empty() {
+            return false;
+        }
+        let rest = &self.model.basis.control_points;
+        for (i, &e) in self.elongations.iter().enumerate() {
+            let k = other.elongations.partition_point(|&o| o < e);
+            let (e0, x0) = match k {
+                0 => (0.0, rest),
+                _ => (
+                    other.elongations[k - 1],
+                    other.equilibria[k - 1].as_ref().expect("all"),
+                ),
+            };
+            let Some((e1, x1)) = other
+                .equilibria
+                .get(k)
+                .map(|x| (other.elongations[k], x.as_ref().expect("all")))
+            else {
+                return false;
+            };
+            let t = if e1 > e0 { (e - e0) / (e1 - e0) } else { 0.0 };
+            self.equilibria[i] = Some(
+                x0.iter()
+                    .zip(x1)
+                    .map(|(a, b)| std::array::from_fn(|c| a[c] + t * (b[c] - a[c])))
+                    .collect(),
+            );
+            self.solved_params[i].clone_from(&other.solved_params[k]);
+            self.tangents[i] = None;
+            self.earlier[i].clear();
+        }
+        true
+    }
+
     /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's
     /// parameters and then the thickness (adjoint form of Clyde et al. 2017, Eq. 6: with
     /// F = rᵀg(x, k) and K λ = Tᵀ H r, dF/dk = rᵀ ∂g/∂k − λᵀ Tᵀ ∂g/∂k; one solve per point
@@ -607,7 +652,48 @@ impl StripRig {
 
 #[cfg(test)]
 mod tests {
-    use super::secant_weights;
+    use super::{secant_weights, TensileStrip};
+    use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
+
+    /// A rig started between another rig's equilibria (same mesh, same material) reaches the
+    /// same forces as one started from rest, in fewer Newton iterations.
+    #[test]
+    fn points_between_solved_ones_start_from_their_interpolation() {
+        let law = Orthotropic {
+            a11: 2e8,
+            a22: 1e8,
+            a12: 3e7,
+            g12: 4e6,
+            warp: Eta::linear(),
+            weft: Eta::linear(),
+            shear: Eta::linear(),
+            cutoffs: Cutoffs::none(),
+        };
+        let m = FabricMaterial::paper("t", 0.1, 2e-4, law);
+        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
+        t.mesh = (4, 6);
+        let nodes = [1e-3, 2e-3, 3e-3];
+        let mids = [5e-4, 1.5e-3, 2.5e-3];
+        let mut solved = t.rig(&m, &nodes).unwrap();
+        solved.run(false).unwrap();
+        let cold = t.rig(&m, &mids).unwrap().run(false).unwrap();
+        let mut warm = t.rig(&m, &mids).unwrap();
+        assert!(warm.warm_between(&solved));
+        let warm = warm.run(false).unwrap();
+        let its = |p: &[super::TensilePoint]| p.iter().map(|p| p.report.iterations).sum::<usize>();
+        for (a, b) in warm.iter().zip(&cold) {
+            assert!(
+                (a.force - b.force).abs() <= 1e-7 * b.force.abs(),
+                "{} vs {}",
+                a.force,
+                b.force
+            );
+        }
+        assert!(its(&warm) < its(&cold), "{} vs {}", its(&warm), its(&cold));
+        // another mesh is not taken
+        t.mesh = (2, 3);
+        assert!(!t.rig(&m, &mids).unwrap().warm_between(&solved));
+    }
 
     /// On a field linear in the parameters, x(k) = A k, the multi-secant predictor is exact for
     /// any change in the span of the earlier ones, and takes the least-squares part of one
