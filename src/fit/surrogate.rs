@@ -237,8 +237,12 @@ pub(super) fn mapped_start(
         if f_new.is_nan() || f_new >= out.after {
             break;
         }
-        // a round that gains under 10 % is the last: the map has done what it can
-        let slow = f_new > 0.9 * out.after;
+        // a round that does not halve the objective is the last: the map has done most of
+        // what it can, and the minimiser's tangent-predicted trials are cheaper than more
+        // mapped rounds (Newton iterations of the five bundled fits: 9626 stopping under a
+        // 10 % gain, 9360 under 30 %, 9247 under 50 %, 9120 after one round; parameters the
+        // same within 1e-4)
+        let slow = f_new > 0.5 * out.after;
         out.kept += 1;
         out.after = f_new;
         *p = best.p;
