@@ -180,49 +180,25 @@ fn a_shape_the_model_cannot_reproduce_is_flagged() {
 /// The shell's lab data without an off-axis test: warp and weft strips (16 × 24, graded) and
 /// cantilevers made by `m`, no bias strip, so no strip determines G12.
 fn shell_lab(m: &kshell::material::FabricMaterial) -> FabricDataset {
-    use kshell::dataset::{BendTest, TensileTest};
     use kshell::scene::{CantileverBend, TensileStrip, STRIP_GRADING};
-    let tensile = [90.0, 0.0]
-        .map(|angle| {
-            let mut s = TensileStrip::new(0.05, 0.075, angle);
-            s.mesh = (16, 24);
-            s.grading = STRIP_GRADING;
-            let dl: Vec<f64> = (0..=10).map(|i| 4e-4 * i as f64).collect();
-            let mut force = vec![0.0];
-            force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
-            TensileTest::new(
-                angle,
-                0.05,
-                0.075,
-                PathBuf::from(format!("a{angle}.csv")),
-                dl,
-                force,
-            )
-        })
-        .to_vec();
-    let bend = [90.0, 0.0]
-        .map(|angle| {
-            let mut c = CantileverBend::new(0.025, 0.05, angle);
-            c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
-            BendTest {
-                angle_deg: angle,
-                width: 0.025,
-                overhang: 0.05,
-                drape_angle_deg: c.run(m).unwrap().drape_angle_deg,
-            }
-        })
-        .to_vec();
-    FabricDataset {
-        name: "made".into(),
-        path: PathBuf::from("made/fabric.toml"),
-        areal_density: Some(m.areal_density),
-        thickness: m.thickness,
-        tensile,
-        bend,
-        shapes: Vec::new(),
-        known: Default::default(),
-        notes: Vec::new(),
-    }
+    let pull = |angle: f64, dl: &[f64]| -> Vec<f64> {
+        let mut s = TensileStrip::new(0.05, 0.075, angle);
+        s.mesh = (16, 24);
+        s.grading = STRIP_GRADING;
+        s.run(m, dl).unwrap().iter().map(|p| p.force).collect()
+    };
+    let drape = |angle: f64| -> f64 {
+        let mut c = CantileverBend::new(0.025, 0.05, angle);
+        c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
+        c.run(m).unwrap().drape_angle_deg
+    };
+    common::made_lab(
+        &[90.0, 0.0],
+        4e-4,
+        &pull,
+        &drape,
+        (m.areal_density, m.thickness),
+    )
 }
 
 /// The shell fit takes G12 from a picture-frame shape where no strip determines it: the

@@ -111,16 +111,37 @@ pub fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
 /// cantilever 25 × 50 mm (twice the default mesh), made by the triangle material `m` on the
 /// meshes its fit uses: a dataset whose truth is known.
 pub fn tri_lab(m: &kshell::tri::TriMaterial, angles: &[f64]) -> kshell::dataset::FabricDataset {
-    use kshell::dataset::{BendTest, FabricDataset, TensileTest};
     use kshell::tri::{TriCantilever, TriTensile};
+    let pull = |angle: f64, dl: &[f64]| -> Vec<f64> {
+        let mut s = TriTensile::new(0.05, 0.075, angle);
+        s.mesh = (8, 12);
+        s.run(m, dl).unwrap().iter().map(|p| p.force).collect()
+    };
+    let drape = |angle: f64| -> f64 {
+        let mut c = TriCantilever::new(0.025, 0.05, angle);
+        c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
+        c.run(m).unwrap().drape_angle_deg
+    };
+    made_lab(angles, 3e-4, &pull, &drape, (m.areal_density, 2e-4))
+}
+
+/// A dataset whose truth is known: strips of 50 × 75 mm at `angles` pulled in ten steps of
+/// `step` (m), their forces from `pull(angle, elongations)`, and a warp and a weft cantilever
+/// 25 × 50 mm, their drape angles from `drape(angle)`; (areal density kg/m², thickness m).
+pub fn made_lab(
+    angles: &[f64],
+    step: f64,
+    pull: &dyn Fn(f64, &[f64]) -> Vec<f64>,
+    drape: &dyn Fn(f64) -> f64,
+    (areal_density, thickness): (f64, f64),
+) -> kshell::dataset::FabricDataset {
+    use kshell::dataset::{BendTest, FabricDataset, TensileTest};
     let tensile = angles
         .iter()
         .map(|&angle| {
-            let mut s = TriTensile::new(0.05, 0.075, angle);
-            s.mesh = (8, 12);
-            let dl: Vec<f64> = (0..=10).map(|i| 3e-4 * i as f64).collect();
+            let dl: Vec<f64> = (0..=10).map(|i| step * i as f64).collect();
             let mut force = vec![0.0];
-            force.extend(s.run(m, &dl[1..]).unwrap().iter().map(|p| p.force));
+            force.extend(pull(angle, &dl[1..]));
             TensileTest::new(
                 angle,
                 0.05,
@@ -132,22 +153,18 @@ pub fn tri_lab(m: &kshell::tri::TriMaterial, angles: &[f64]) -> kshell::dataset:
         })
         .collect();
     let bend = [90.0, 0.0]
-        .map(|angle| {
-            let mut c = TriCantilever::new(0.025, 0.05, angle);
-            c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
-            BendTest {
-                angle_deg: angle,
-                width: 0.025,
-                overhang: 0.05,
-                drape_angle_deg: c.run(m).unwrap().drape_angle_deg,
-            }
+        .map(|angle| BendTest {
+            angle_deg: angle,
+            width: 0.025,
+            overhang: 0.05,
+            drape_angle_deg: drape(angle),
         })
         .to_vec();
     FabricDataset {
         name: "made".into(),
         path: PathBuf::from("made/fabric.toml"),
-        areal_density: Some(m.areal_density),
-        thickness: 2e-4,
+        areal_density: Some(areal_density),
+        thickness,
         tensile,
         bend,
         shapes: Vec::new(),
