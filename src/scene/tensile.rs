@@ -10,6 +10,8 @@ use crate::subdiv::BoundaryRule;
 use crate::Vec3;
 use std::sync::Arc;
 
+mod warm;
+
 /// ASTM D5035 strip: width × gauge length, clamped along both ends, one clamp pulled along y.
 #[derive(Clone, Debug)]
 pub struct TensileStrip {
@@ -168,39 +170,6 @@ impl TensileStrip {
     }
 }
 
-/// Earlier equilibria kept per point for the secant predictor (two measured best; see
-/// [`StripRig::warm_start`]).
-const SECANTS: usize = 2;
-
-/// Weights c of the multi-secant predictor x ≈ x₁ + Σ c_j (x_j − x₁): the least-squares (minimum
-/// norm) solution of Σ c_j (k_j − k₁) = k − k₁, each parameter relative to its largest size
-/// among the points (a pseudo-inverse that drops directions under 1e-8 of the largest, so
-/// nearly repeated points cannot blow the weights up). Exact for equilibria that depend
-/// linearly on the parameters within the span of the earlier changes; first order otherwise.
-fn secant_weights(k: &[f64], k1: &[f64], earlier: &[&[f64]]) -> Vec<f64> {
-    let (n, m) = (k.len(), earlier.len());
-    let scale: Vec<f64> = (0..n)
-        .map(|p| {
-            earlier
-                .iter()
-                .map(|e| e[p].abs())
-                .fold(k1[p].abs(), f64::max)
-                .max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let s = nalgebra::DMatrix::from_fn(n, m, |p, j| (earlier[j][p] - k1[p]) / scale[p]);
-    let d = nalgebra::DVector::from_fn(n, |p, _| (k[p] - k1[p]) / scale[p]);
-    if d.iter().all(|v| *v == 0.0) {
-        return vec![0.0; m];
-    }
-    let svd = s.svd(true, true);
-    let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
-    match svd.solve(&d, 1e-8 * top) {
-        Ok(c) if c.iter().all(|v| v.is_finite()) => c.iter().copied().collect(),
-        _ => vec![0.0; m],
-    }
-}
-
 /// Newton iterations a warm-started strip solve may take before it restarts cold.
 const WARM_ITERATIONS: usize = 12;
 
@@ -238,7 +207,7 @@ pub struct StripRig {
     /// per point: the parameters (law, then thickness) of its equilibrium and ∂q/∂k there,
     /// which predict the equilibrium for new parameters (q + ∂q/∂k Δk)
     tangents: Vec<Option<ParameterTangent>>,
-    /// per point: up to [`SECANTS`] equilibria before the stored one, newest first, with their
+    /// per point: up to [`warm::SECANTS`] equilibria before the stored one, newest first, with their
     /// parameters (law, then thickness), for the secant predictor where no tangent is at hand
     /// (see [`StripRig::warm_start`])
     earlier: Vec<Vec<(Vec<Vec3>, Vec<f64>)>>,
@@ -283,72 +252,6 @@ impl StripRig {
 
     pub fn elongations(&self) -> &[f64] {
         &self.elongations
-    }
-
-    /// Takes `other`'s equilibria as this rig's warm starts, where the two rigs share the
-    /// mesh, the clamps and the elongations (strips cut at nearby angles: the angle changes
-    /// only the material frame, not the control net). Returns whether they were taken. The
-    /// parameter tangents are not taken: they belong to the other angle's equilibria.
-    pub fn warm_from(&mut self, other: &StripRig) -> bool {
-        let same = self.elongations == other.elongations
-            && self.length == other.length
-            && self.model.basis.control_points == other.model.basis.control_points
-            && self.bottom_fixed == other.bottom_fixed
-            && self.top_fixed == other.top_fixed;
-        if !same {
-            return false;
-        }
-        for (mine, theirs) in self.equilibria.iter_mut().zip(&other.equilibria) {
-            if mine.is_none() {
-                mine.clone_from(theirs);
-            }
-        }
-        true
-    }
-
-    /// Takes as warm starts, where the two rigs share the mesh and the clamps, the equilibria
-    /// of `other` (solved with the same material) interpolated linearly in the elongation
-    /// between its two nearest points (the rest state below its first): a first-order start
-    /// for points between another rig's, such as the fitter's interpolation check halfway
-    /// between its nodes. Returns whether they were taken.
-    pub fn warm_between(&mut self, other: &StripRig) -> bool {
-        let same = self.length == other.length
-            && self.model.basis.control_points == other.model.basis.control_points
-            && self.bottom_fixed == other.bottom_fixed
-            && self.top_fixed == other.top_fixed
-            && other.equilibria.iter().all(Option::is_some);
-        if !same || other.elongations.is_empty() {
-            return false;
-        }
-        let rest = &self.model.basis.control_points;
-        for (i, &e) in self.elongations.iter().enumerate() {
-            let k = other.elongations.partition_point(|&o| o < e);
-            let (e0, x0) = match k {
-                0 => (0.0, rest),
-                _ => (
-                    other.elongations[k - 1],
-                    other.equilibria[k - 1].as_ref().expect("all"),
-                ),
-            };
-            let Some((e1, x1)) = other
-                .equilibria
-                .get(k)
-                .map(|x| (other.elongations[k], x.as_ref().expect("all")))
-            else {
-                return false;
-            };
-            let t = if e1 > e0 { (e - e0) / (e1 - e0) } else { 0.0 };
-            self.equilibria[i] = Some(
-                x0.iter()
-                    .zip(x1)
-                    .map(|(a, b)| std::array::from_fn(|c| a[c] + t * (b[c] - a[c])))
-                    .collect(),
-            );
-            self.solved_params[i].clone_from(&other.solved_params[k]);
-            self.tangents[i] = None;
-            self.earlier[i].clear();
-        }
-        true
     }
 
     /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's
@@ -433,7 +336,7 @@ impl StripRig {
                     let earlier = &mut self.earlier[i];
                     earlier.retain(|e| e.1.len() == k0.len());
                     earlier.insert(0, (x0, k0));
-                    earlier.truncate(SECANTS);
+                    earlier.truncate(warm::SECANTS);
                 }
             }
             self.equilibria[i] = Some(x.clone());
@@ -441,52 +344,6 @@ impl StripRig {
             previous = Some((dl, x, slope));
         }
         Ok(out)
-    }
-
-    /// The start at point `i` from its stored equilibrium, moved to the current parameters:
-    /// along ∂q/∂k where the last run computed it there (first order), else by the
-    /// multi-secant through the equilibria before it ([`secant_weights`]; a fitter's trials
-    /// without sensitivities: space-mapped starts, line searches). Measured on the five
-    /// bundled fits: Newton iterations 11838 → 10244 with two earlier equilibria kept (one:
-    /// 10392, four: 10489), every fitted parameter within 2e-8. `None` before the first solve.
-    fn warm_start(&self, i: usize) -> Option<Vec<Vec3>> {
-        let mut x = self.equilibria[i].clone()?;
-        if let Some((k0, dq)) = &self.tangents[i] {
-            if k0.len() == self.params.len() {
-                let mut d = vec![0.0; self.system.num_free];
-                for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
-                    let dk = k - k0;
-                    if dk != 0.0 {
-                        d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
-                    }
-                }
-                self.system.advance(&mut x, &d);
-                return Some(x);
-            }
-        }
-        let Some(k1) = &self.solved_params[i] else {
-            return Some(x);
-        };
-        let earlier: Vec<&(Vec<Vec3>, Vec<f64>)> = self.earlier[i]
-            .iter()
-            .filter(|e| e.1.len() == k1.len())
-            .collect();
-        if k1.len() != self.params.len() || earlier.is_empty() {
-            return Some(x);
-        }
-        let ks: Vec<&[f64]> = earlier.iter().map(|e| &e.1[..]).collect();
-        let c = secant_weights(&self.params, k1, &ks);
-        let x1 = x.clone();
-        for (cj, (xj, _)) in c.iter().zip(earlier) {
-            if *cj != 0.0 {
-                for ((p, a), b) in x.iter_mut().zip(&x1).zip(xj) {
-                    for d in 0..3 {
-                        p[d] += cj * (b[d] - a[d]);
-                    }
-                }
-            }
-        }
-        Some(x)
     }
 
     /// The predictor at elongation `dl`: the last equilibrium moved along its tangent to the
@@ -647,92 +504,5 @@ impl StripRig {
             })
             .collect();
         Ok((df, dq))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{secant_weights, TensileStrip};
-    use crate::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
-
-    /// A rig started between another rig's equilibria (same mesh, same material) reaches the
-    /// same forces as one started from rest, in fewer Newton iterations.
-    #[test]
-    fn points_between_solved_ones_start_from_their_interpolation() {
-        let law = Orthotropic {
-            a11: 2e8,
-            a22: 1e8,
-            a12: 3e7,
-            g12: 4e6,
-            warp: Eta::linear(),
-            weft: Eta::linear(),
-            shear: Eta::linear(),
-            cutoffs: Cutoffs::none(),
-        };
-        let m = FabricMaterial::paper("t", 0.1, 2e-4, law);
-        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
-        t.mesh = (4, 6);
-        let nodes = [1e-3, 2e-3, 3e-3];
-        let mids = [5e-4, 1.5e-3, 2.5e-3];
-        let mut solved = t.rig(&m, &nodes).unwrap();
-        solved.run(false).unwrap();
-        let cold = t.rig(&m, &mids).unwrap().run(false).unwrap();
-        let mut warm = t.rig(&m, &mids).unwrap();
-        assert!(warm.warm_between(&solved));
-        let warm = warm.run(false).unwrap();
-        let its = |p: &[super::TensilePoint]| p.iter().map(|p| p.report.iterations).sum::<usize>();
-        for (a, b) in warm.iter().zip(&cold) {
-            assert!(
-                (a.force - b.force).abs() <= 1e-7 * b.force.abs(),
-                "{} vs {}",
-                a.force,
-                b.force
-            );
-        }
-        assert!(its(&warm) < its(&cold), "{} vs {}", its(&warm), its(&cold));
-        // another mesh is not taken
-        t.mesh = (2, 3);
-        assert!(!t.rig(&m, &mids).unwrap().warm_between(&solved));
-    }
-
-    /// On a field linear in the parameters, x(k) = A k, the multi-secant predictor is exact for
-    /// any change in the span of the earlier ones, and takes the least-squares part of one
-    /// outside it; no change gives no move.
-    #[test]
-    fn the_secant_predictor_is_exact_on_a_linear_field() {
-        let a = [[2.0, -1.0, 0.5], [0.3, 4.0, -2.0]];
-        let x = |k: &[f64]| -> Vec<f64> {
-            a.iter()
-                .map(|r| r.iter().zip(k).map(|(p, q)| p * q).sum())
-                .collect()
-        };
-        // parameters of very different sizes, as a stiffness beside an exponent
-        let k1 = [1e6, 3.0, 0.2];
-        let e1 = [1.1e6, 3.0, 0.2];
-        let e2 = [1e6, 2.5, 0.25];
-        let predict = |k: &[f64], earlier: &[&[f64]]| -> Vec<f64> {
-            let c = secant_weights(k, &k1, earlier);
-            let x1 = x(&k1);
-            let mut p = x1.clone();
-            for (cj, e) in c.iter().zip(earlier) {
-                for ((pi, a), b) in p.iter_mut().zip(&x1).zip(x(e)) {
-                    *pi += cj * (b - a);
-                }
-            }
-            p
-        };
-        // a change in the span of the two earlier steps
-        let k = [1e6 + 0.3e6, 3.0 - 0.2 * 0.5, 0.2 + 0.2 * 0.05];
-        for (p, q) in predict(&k, &[&e1, &e2]).iter().zip(x(&k)) {
-            assert!((p - q).abs() <= 1e-9 * q.abs().max(1.0), "{p} vs {q}");
-        }
-        // with the first earlier step only, the second direction is not known: the move is
-        // the projection on the first
-        let c = secant_weights(&k, &k1, &[&e1]);
-        assert!((c[0] - 3.0).abs() < 1e-12, "{c:?}");
-        assert_eq!(secant_weights(&k1, &k1, &[&e1, &e2]), vec![0.0, 0.0]);
-        // a repeated earlier point adds nothing and blows nothing up
-        let c = secant_weights(&k, &k1, &[&e1, &e1]);
-        assert!(c.iter().all(|v| v.is_finite() && v.abs() < 10.0), "{c:?}");
     }
 }
