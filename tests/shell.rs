@@ -1,6 +1,6 @@
 //! The shell engine against finite differences, rigid motions and closed-form strips.
 
-use kshell::assembly::{BlockMatrix, ShellModel, Want};
+use kshell::assembly::{BlockMatrix, ShellModel, Want, YarnRule};
 use kshell::material::{FabricMaterial, OrthotropicStvk};
 use kshell::mesh::{rectangular_grid, shapes, PolyMesh};
 use kshell::scene::TensileStrip;
@@ -78,14 +78,19 @@ fn perturbed(x: &[Vec3], rng: &mut Rng, amp: f64) -> Vec<Vec3> {
         .collect()
 }
 
+/// Under both yarn rules (the full Gauss rule, and the yarn terms on face centres).
 #[test]
 fn gradient_and_hessian_match_central_differences() {
     let mut rng = Rng(5);
     let mut kinds = std::collections::HashSet::new();
+    let rules = [BoundaryRule::Phantom, BoundaryRule::Ghost];
+    let yarns = [YarnRule::Full, YarnRule::Centre];
     for (name, mesh) in cases() {
-        for rule in [BoundaryRule::Phantom, BoundaryRule::Ghost] {
+        for (rule, yarn) in rules.into_iter().flat_map(|r| yarns.map(|y| (r, y))) {
             let tau = 5e-4;
-            let model = model_for(&mesh, rule, tau);
+            let mut model = model_for(&mesh, rule, tau);
+            model.set_yarn_rule(yarn).unwrap();
+            let rule = (rule, yarn);
             kinds.extend(model.basis.face_kinds.iter().copied());
             let x = perturbed(&model.basis.control_points, &mut rng, 2e-3);
             let n = x.len();
@@ -301,16 +306,43 @@ fn parameter_and_thickness_sensitivities_match_differences() {
     )
     .unwrap();
     let tau = 4e-4;
-    let mut model =
-        ShellModel::new(basis, [0.8, 0.6, 0.1], Arc::new(law.clone()), tau, 0.2).unwrap();
     let mut rng = Rng(17);
-    let x = perturbed(&model.basis.control_points, &mut rng, 3e-3);
-    let sens = model.sensitivities(&x).unwrap();
+    for yarn in [YarnRule::Full, YarnRule::Centre] {
+        let mut model = ShellModel::new(
+            basis.clone(),
+            [0.8, 0.6, 0.1],
+            Arc::new(law.clone()),
+            tau,
+            0.2,
+        )
+        .unwrap();
+        model.set_yarn_rule(yarn).unwrap();
+        let x = perturbed(&model.basis.control_points, &mut rng, 3e-3);
+        sensitivities_match_differences(&mut model, &law, &x, &format!("{yarn:?}"));
+        // bending of its own: the law's and the thickness's terms (the rigidities' own are
+        // checked through the drape angle in tests/sensitivities.rs)
+        model.set_bending(Some(kshell::material::BendingRigidity {
+            warp: 2e-6,
+            weft: 1e-6,
+            twist: 3e-7,
+        }));
+        sensitivities_match_differences(&mut model, &law, &x, &format!("{yarn:?}, own bending"));
+    }
+}
+
+fn sensitivities_match_differences(
+    model: &mut ShellModel,
+    law: &kshell::material::Orthotropic,
+    x: &[Vec3],
+    label: &str,
+) {
+    let tau = model.thickness;
+    let sens = model.sensitivities(x).unwrap();
     let k0 = law.params();
     let n = x.len();
     let mut gp = vec![[0.0; 3]; n];
     let mut gm = vec![[0.0; 3]; n];
-    for (j, name) in sens.names.iter().enumerate() {
+    for (j, name) in sens.names.iter().enumerate().take(k0.len() + 1) {
         let is_tau = j == k0.len();
         let base = if is_tau { tau } else { k0[j] };
         let h = 1e-5 * base.abs().max(1e-2);
@@ -326,14 +358,14 @@ fn parameter_and_thickness_sensitivities_match_differences() {
                 model.law = Arc::new(l);
                 model.set_thickness(tau).unwrap();
             }
-            model.assemble(&x, Want::Gradient, Some(g), None).unwrap()
+            model.assemble(x, Want::Gradient, Some(g), None).unwrap()
         };
         let ep = eval(h, &mut gp);
         let em = eval(-h, &mut gm);
         let fd = (ep - em) / (2.0 * h);
         assert!(
             (fd - sens.energy[j]).abs() <= 1e-6 * sens.energy[j].abs().max(1e-12),
-            "∂E/∂{name}: {fd} vs {}",
+            "{label}: ∂E/∂{name}: {fd} vs {}",
             sens.energy[j]
         );
         let scale = sens.gradient[j]
@@ -345,7 +377,7 @@ fn parameter_and_thickness_sensitivities_match_differences() {
                 let fd = (gp[i][c] - gm[i][c]) / (2.0 * h);
                 assert!(
                     (fd - sens.gradient[j][i][c]).abs() <= 1e-6 * scale,
-                    "∂g/∂{name} node {i} comp {c}: {fd} vs {}",
+                    "{label}: ∂g/∂{name} node {i} comp {c}: {fd} vs {}",
                     sens.gradient[j][i][c]
                 );
             }

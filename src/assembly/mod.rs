@@ -16,9 +16,11 @@
 
 mod blocks;
 mod loads;
+mod reduced;
 mod section;
 mod sensitivities;
 pub use blocks::{BlockMatrix, BlockPattern};
+pub use reduced::YarnRule;
 pub use sensitivities::BENDING_PARAMS;
 
 use crate::material::{BendingRigidity, Law, OutOfDomain};
@@ -28,6 +30,7 @@ use crate::subdiv::LimitBasis;
 use crate::Vec3;
 use loads::EdgeMoment;
 use nalgebra::{Matrix3, Vector3};
+use reduced::{Centres, Part};
 use section::Section;
 use std::sync::Arc;
 
@@ -73,6 +76,10 @@ pub struct ShellModel {
     face_blocks: Vec<Vec<u32>>,
     /// Position of every stencil entry in its face's node list (aligned with the stencil table).
     local_index: Vec<u16>,
+    /// The warp direction the rest frames were built with.
+    warp: Vec3,
+    /// The face centres carrying the yarn terms ([`YarnRule::Centre`]; `None`: the full rule).
+    centres: Option<Centres>,
 }
 
 /// Parameter sensitivities of the energy and of its gradient.
@@ -111,6 +118,8 @@ pub enum ModelError {
     Rest { point: usize, source: RestError },
     #[error("thickness must be positive and finite, got {0}")]
     Thickness(f64),
+    #[error("yarn terms on face centres: {0}")]
+    Centre(String),
 }
 
 /// Standard gravity, m/s².
@@ -170,6 +179,8 @@ impl ShellModel {
             face_nodes,
             face_blocks,
             local_index,
+            warp,
+            centres: None,
             gravity_gradient: vec![[0.0; 3]; basis.control_points.len()],
             dead_load: vec![[0.0; 3]; basis.control_points.len()],
             external_gradient: vec![[0.0; 3]; basis.control_points.len()],
@@ -201,10 +212,27 @@ impl ShellModel {
         y: &YVec,
         want: Want,
     ) -> Result<(f64, YVec, Option<YMat>), OutOfDomain> {
-        let rest = &self.rest[q];
+        let part = if self.centres.is_some() {
+            Part::LessYarn
+        } else {
+            Part::Whole
+        };
+        self.rest_point_terms(&self.rest[q], y, want, part)
+    }
+
+    /// Energy, gradient and Hessian with respect to y of `part` of the section at a point of
+    /// rest frame `rest`.
+    #[inline(always)]
+    fn rest_point_terms(
+        &self,
+        rest: &RestPoint,
+        y: &YVec,
+        want: Want,
+        part: Part,
+    ) -> Result<(f64, YVec, Option<YMat>), OutOfDomain> {
         if want == Want::Energy {
             let (em, eb) = rest.strain_values(y);
-            let e = self.section(&em, &eb, want)?.energy;
+            let e = self.section(&em, &eb, want, part)?.energy;
             return Ok((rest.d_area * e, YVec::zeros(), None));
         }
         let (m, b) = rest.strains(y);
@@ -217,7 +245,7 @@ impl ShellModel {
             c0,
             c1,
             c2,
-        } = self.section(&em, &eb, want)?;
+        } = self.section(&em, &eb, want, part)?;
         let da = rest.d_area;
         let mut g = YVec::zeros();
         for k in 0..3 {
@@ -412,70 +440,92 @@ impl ShellModel {
             if self.pressure != 0.0 {
                 self.pressure_terms(q, x, want_g, want_h, local, n, acc, s);
             }
-            if want_g {
-                for (&i, wi) in idx.iter().zip(w) {
-                    for k in 0..5 {
-                        for c in 0..3 {
-                            acc.grad[i as usize][c] += wi[k + 1] * gy[3 * k + c];
-                        }
-                    }
-                }
-            }
-            if let (true, Some(hy)) = (want_h, hy) {
-                let m = idx.len();
-                s.r.clear();
-                s.r.resize(m, [0.0; 45]);
-                // R_al = Σ_k W_ak H_kl  (3 × 3 blocks)
-                // row k of 3 × 3 blocks of H_y, flattened: ht[k][9l + 3j + i] = H_y[3k + i, 3l + j]
-                let mut ht = [[0.0f64; 45]; 5];
-                for (k, row) in ht.iter_mut().enumerate() {
-                    for l in 0..5 {
-                        for j in 0..3 {
-                            for i in 0..3 {
-                                row[9 * l + 3 * j + i] = hy[(3 * k + i, 3 * l + j)];
-                            }
-                        }
-                    }
-                }
-                // R_a = Σ_k W_ak H_k· : five length-45 multiply-adds per node
-                for a in 0..m {
-                    let mut r = [0.0f64; 45];
-                    for k in 0..5 {
-                        let c = w[a][k + 1];
-                        for (x, h) in r.iter_mut().zip(&ht[k]) {
-                            *x += c * h;
-                        }
-                    }
-                    s.r[a] = r;
-                }
-                // H_ab = Σ_l R_al W_bl, into the face's packed upper triangle
-                for a in 0..m {
-                    let la = local[a] as usize;
-                    let ra = &s.r[a];
-                    for b in a..m {
-                        let mut blk = [0.0f64; 9];
-                        for l in 0..5 {
-                            let c = w[b][l + 1];
-                            for (x, r) in blk.iter_mut().zip(&ra[9 * l..9 * l + 9]) {
-                                *x += c * r;
-                            }
-                        }
-                        let lb = local[b] as usize;
-                        // stencil and face node lists are both sorted, so la ≤ lb
-                        let dst = &mut s.local[la * n - la * (la + 1) / 2 + lb];
-                        for (x, v) in dst.as_mut_slice().iter_mut().zip(&blk) {
-                            *x += v;
-                        }
-                    }
-                }
-            }
+            self.scatter(idx, w, local, n, &gy, hy, want, acc, s);
         }
+        self.centre_terms(face, x, want, acc, s)?;
         if want_h {
             for (k, blk) in self.face_blocks[face].iter().zip(&s.local) {
                 acc.blocks[*k as usize] += blk;
             }
         }
         Ok(())
+    }
+
+    /// Adds a point's y-gradient and y-Hessian, expanded through its stencil (`local`: the
+    /// entries' positions in the face's `n` nodes), to the accumulator and the face block.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn scatter(
+        &self,
+        idx: &[u32],
+        w: &[[f64; 6]],
+        local: &[u16],
+        n: usize,
+        gy: &YVec,
+        hy: Option<YMat>,
+        want: Want,
+        acc: &mut Accumulator,
+        s: &mut FaceScratch,
+    ) {
+        let want_h = want == Want::Hessian && !acc.blocks.is_empty();
+        let want_g = want != Want::Energy && !acc.grad.is_empty();
+        if want_g {
+            for (&i, wi) in idx.iter().zip(w) {
+                for k in 0..5 {
+                    for c in 0..3 {
+                        acc.grad[i as usize][c] += wi[k + 1] * gy[3 * k + c];
+                    }
+                }
+            }
+        }
+        if let (true, Some(hy)) = (want_h, hy) {
+            let m = idx.len();
+            s.r.clear();
+            s.r.resize(m, [0.0; 45]);
+            // R_al = Σ_k W_ak H_kl  (3 × 3 blocks)
+            // row k of 3 × 3 blocks of H_y, flattened: ht[k][9l + 3j + i] = H_y[3k + i, 3l + j]
+            let mut ht = [[0.0f64; 45]; 5];
+            for (k, row) in ht.iter_mut().enumerate() {
+                for l in 0..5 {
+                    for j in 0..3 {
+                        for i in 0..3 {
+                            row[9 * l + 3 * j + i] = hy[(3 * k + i, 3 * l + j)];
+                        }
+                    }
+                }
+            }
+            // R_a = Σ_k W_ak H_k· : five length-45 multiply-adds per node
+            for a in 0..m {
+                let mut r = [0.0f64; 45];
+                for k in 0..5 {
+                    let c = w[a][k + 1];
+                    for (x, h) in r.iter_mut().zip(&ht[k]) {
+                        *x += c * h;
+                    }
+                }
+                s.r[a] = r;
+            }
+            // H_ab = Σ_l R_al W_bl, into the face's packed upper triangle
+            for a in 0..m {
+                let la = local[a] as usize;
+                let ra = &s.r[a];
+                for b in a..m {
+                    let mut blk = [0.0f64; 9];
+                    for l in 0..5 {
+                        let c = w[b][l + 1];
+                        for (x, r) in blk.iter_mut().zip(&ra[9 * l..9 * l + 9]) {
+                            *x += c * r;
+                        }
+                    }
+                    let lb = local[b] as usize;
+                    // stencil and face node lists are both sorted, so la ≤ lb
+                    let dst = &mut s.local[la * n - la * (la + 1) / 2 + lb];
+                    for (x, v) in dst.as_mut_slice().iter_mut().zip(&blk) {
+                        *x += v;
+                    }
+                }
+            }
+        }
     }
 
     /// Lumped (row-sum) mass of each control point, kg: ρ Σ_q dA_q |W_q,i|. With a zero areal

@@ -7,8 +7,10 @@
 //!   quadratic in ξ).
 //! - Bending of its own ([`crate::material::bending`]): W = τ ψ(Ẽ_m) + ½ Ẽ_bᵀ D Ẽ_b with D the
 //!   rigidities' diagonal tangent; one law evaluation per point instead of three.
+//! - Under [`super::YarnRule::Centre`] a Gauss point carries the section less τ ψ_y(Ẽ_m) and
+//!   a face centre τ ψ_y(Ẽ_m) alone (see [`super::reduced`]).
 
-use super::{ShellModel, Want};
+use super::{Part, ShellModel, Want};
 use crate::material::OutOfDomain;
 use nalgebra::{Matrix3, Vector3};
 
@@ -23,23 +25,56 @@ pub(super) struct Section {
     pub c2: Matrix3<f64>,
 }
 
-impl ShellModel {
-    /// The section's response at one point.
-    #[inline(always)]
-    pub(super) fn section(
-        &self,
-        em: &Vector3<f64>,
-        eb: &Vector3<f64>,
-        want: Want,
-    ) -> Result<Section, OutOfDomain> {
-        let mut s = Section {
+impl Section {
+    fn zero() -> Self {
+        Self {
             energy: 0.0,
             n: Vector3::zeros(),
             mo: Vector3::zeros(),
             c0: Matrix3::zeros(),
             c1: Matrix3::zeros(),
             c2: Matrix3::zeros(),
+        }
+    }
+}
+
+impl ShellModel {
+    /// The response of `part` of the section at one point.
+    #[inline(always)]
+    pub(super) fn section(
+        &self,
+        em: &Vector3<f64>,
+        eb: &Vector3<f64>,
+        want: Want,
+        part: Part,
+    ) -> Result<Section, OutOfDomain> {
+        let mut s = match part {
+            Part::Whole => return self.whole_section(em, eb, want),
+            Part::LessYarn => self.whole_section(em, eb, want)?,
+            Part::Yarn => Section::zero(),
         };
+        let sign = if part == Part::Yarn { 1.0 } else { -1.0 };
+        let tau = sign * self.thickness;
+        let r = self.law.yarn_response(em)?;
+        s.energy += tau * r.psi;
+        if want != Want::Energy {
+            s.n += tau * r.stress;
+        }
+        if want == Want::Hessian {
+            s.c0 += tau * r.tangent;
+        }
+        Ok(s)
+    }
+
+    /// The whole section's response at one point.
+    #[inline(always)]
+    fn whole_section(
+        &self,
+        em: &Vector3<f64>,
+        eb: &Vector3<f64>,
+        want: Want,
+    ) -> Result<Section, OutOfDomain> {
+        let mut s = Section::zero();
         if let Some(b) = &self.bending {
             let tau = self.thickness;
             let d = b.matrix();

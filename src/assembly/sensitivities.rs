@@ -12,6 +12,31 @@ pub const BENDING_PARAMS: [&str; 3] = ["bending_warp", "bending_weft", "bending_
 
 type Jets<'a> = (&'a StrainJet, &'a StrainJet);
 
+/// Adds one point's terms (weight `da`, stencil `(idx, w)`) to the wanted sensitivities.
+fn add_point(
+    da: f64,
+    (idx, w): (&[u32], &[[f64; 6]]),
+    dey: &[f64],
+    dgy: &[YVec],
+    want: &impl Fn(usize) -> bool,
+    energy: &mut [f64],
+    gradient: &mut [Vec<Vec3>],
+) {
+    for j in 0..energy.len() {
+        if !want(j) {
+            continue;
+        }
+        energy[j] += da * dey[j];
+        for (&i, wi) in idx.iter().zip(w) {
+            for k in 0..5 {
+                for c in 0..3 {
+                    gradient[j][i as usize][c] += da * wi[k + 1] * dgy[j][3 * k + c];
+                }
+            }
+        }
+    }
+}
+
 /// Σ_k v_k ∇E_k: a strain-space vector pulled back to y.
 fn pull_back(v: &Vector3<f64>, jet: &StrainJet) -> YVec {
     let mut out = YVec::zeros();
@@ -62,25 +87,62 @@ impl ShellModel {
             } else {
                 self.paper_section_terms(&(&m, &b), nlaw, &want, &mut dey, &mut dgy)?;
             }
-            for j in 0..np {
-                if !want(j) {
-                    continue;
-                }
-                energy[j] += da * dey[j];
-                for (&i, wi) in idx.iter().zip(w) {
-                    for k in 0..5 {
-                        for c in 0..3 {
-                            gradient[j][i as usize][c] += da * wi[k + 1] * dgy[j][3 * k + c];
-                        }
-                    }
-                }
+            if self.centres.is_some() {
+                self.yarn_terms(&m, -1.0, nlaw, &want, &mut dey, &mut dgy)?;
             }
+            add_point(da, (idx, w), &dey, &dgy, &want, &mut energy, &mut gradient);
+        }
+        for face in 0..self.basis.num_faces {
+            let Some((idx, w, y, rest)) = self.centre_kinematics(face, x) else {
+                break;
+            };
+            let (m, _) = rest.strains(&y);
+            let mut dey = vec![0.0; np];
+            let mut dgy = vec![YVec::zeros(); np];
+            self.yarn_terms(&m, 1.0, nlaw, &want, &mut dey, &mut dgy)?;
+            add_point(
+                rest.d_area,
+                (idx, w),
+                &dey,
+                &dgy,
+                &want,
+                &mut energy,
+                &mut gradient,
+            );
         }
         Ok(Sensitivities {
             names,
             energy,
             gradient,
         })
+    }
+
+    /// `sign` × the terms of τ ψ_y(Ẽ_m), the yarn part that [`super::YarnRule::Centre`]
+    /// moves from the Gauss points (−1) to the face centres (+1).
+    fn yarn_terms(
+        &self,
+        m: &StrainJet,
+        sign: f64,
+        nlaw: usize,
+        want: &impl Fn(usize) -> bool,
+        dey: &mut [f64],
+        dgy: &mut [YVec],
+    ) -> Result<(), OutOfDomain> {
+        let em = Vector3::from(m.value);
+        let tau = sign * self.thickness;
+        let pr = self.law.yarn_param_response(&em)?;
+        for j in 0..nlaw {
+            if want(j) {
+                dey[j] += tau * pr.dpsi[j];
+                dgy[j] += tau * pull_back(&pr.dstress[j], m);
+            }
+        }
+        if want(nlaw) {
+            let r = self.law.yarn_response(&em)?;
+            dey[nlaw] += sign * r.psi;
+            dgy[nlaw] += sign * pull_back(&r.stress, m);
+        }
+        Ok(())
     }
 
     /// One point's terms under the paper's section (law parameters, then τ).

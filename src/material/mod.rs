@@ -44,6 +44,30 @@ pub trait Law: Send + Sync {
 
     /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
     fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain>;
+
+    /// The yarn part ψ_y(Ẽ₁₁, Ẽ₂₂) of a law that separates as ψ = ψ_y(Ẽ₁₁, Ẽ₂₂) + ψ_s(Ẽ₁₂)
+    /// with ψ_s(0) = ψ_s'(0) = 0 (both laws here: the warp, weft and a₁₂ terms against the
+    /// shear term): ψ at (Ẽ₁₁, Ẽ₂₂, 0) with the shear stress and the shear row and column of
+    /// the tangent removed. What the selective reduced integration of
+    /// [`crate::assembly::YarnRule::Centre`] evaluates once per face.
+    fn yarn_response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
+        let mut r = self.response(&Vector3::new(e[0], e[1], 0.0))?;
+        r.stress[2] = 0.0;
+        for k in 0..3 {
+            r.tangent[(2, k)] = 0.0;
+            r.tangent[(k, 2)] = 0.0;
+        }
+        Ok(r)
+    }
+
+    /// [`Law::param_response`] of the yarn part [`Law::yarn_response`].
+    fn yarn_param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
+        let mut r = self.param_response(&Vector3::new(e[0], e[1], 0.0))?;
+        for d in &mut r.dstress {
+            d[2] = 0.0;
+        }
+        Ok(r)
+    }
 }
 
 /// ψ = a₁₁/2 Ẽ₁₁² + a₁₂ Ẽ₁₁Ẽ₂₂ + a₂₂/2 Ẽ₂₂² + G₁₂ Ẽ₁₂² (Pa). Isotropic when a₁₁ = a₂₂ and

@@ -507,6 +507,36 @@ mod tests {
         }
     }
 
+    /// The law separates into the yarn part and the shear term: ψ − ψ_y depends on Ẽ₁₂ alone
+    /// (inside and outside the cut-off box), and the yarn part carries no shear.
+    #[test]
+    fn the_yarn_part_leaves_the_shear_term_alone() {
+        let law = sample();
+        for e in strains() {
+            let (r, y) = (law.response(&e).unwrap(), law.yarn_response(&e).unwrap());
+            let s = law.response(&Vector3::new(0.0, 0.0, e[2])).unwrap();
+            assert!(
+                (r.psi - y.psi - s.psi).abs() <= 1e-12 * r.psi.abs(),
+                "{e:?}"
+            );
+            assert!((r.stress - y.stress - s.stress).amax() <= 1e-9 * r.stress.amax());
+            let mut shear = Matrix3::zeros();
+            shear[(2, 2)] = s.tangent[(2, 2)];
+            assert!((r.tangent - y.tangent - shear).amax() <= 1e-9 * r.tangent.amax());
+            assert_eq!(y.stress[2], 0.0);
+            let (p, py) = (
+                law.param_response(&e).unwrap(),
+                law.yarn_param_response(&e).unwrap(),
+            );
+            let ps = law.param_response(&Vector3::new(0.0, 0.0, e[2])).unwrap();
+            for j in 0..p.dpsi.len() {
+                let scale = p.dpsi[j].abs().max(p.dstress[j].amax()).max(1e-30);
+                assert!((p.dpsi[j] - py.dpsi[j] - ps.dpsi[j]).abs() <= 1e-9 * scale);
+                assert!((p.dstress[j] - py.dstress[j] - ps.dstress[j]).amax() <= 1e-9 * scale);
+            }
+        }
+    }
+
     #[test]
     fn shear_sign_does_not_matter() {
         let law = sample();

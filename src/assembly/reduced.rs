@@ -1,0 +1,276 @@
+//! Selective reduced integration of the yarn terms: a membrane that does not lock when the
+//! yarns are nearly inextensible and lie across the cage.
+//!
+//! A bias strip of stiff yarns (a₁₁ = a₂₂ ≫ G₁₂) deforms by shearing the yarn net at constant
+//! yarn length. On a cage along the strip's axes the yarns run at 45° to the faces, and 4 × 4
+//! Gauss points per face impose Ẽ₁₁ ≈ Ẽ₂₂ ≈ 0 at 32 points against about two in-plane degrees
+//! of freedom per face: the membrane locks, and the force falls 2–6× with every refinement
+//! (`paper_repro/convergence/stiff_bias`). 2 × 2 points lock as badly.
+//!
+//! [`YarnRule::Centre`] splits the separable law ψ = ψ_y(Ẽ₁₁, Ẽ₂₂) + ψ_s(Ẽ₁₂)
+//! ([`crate::material::Law::yarn_response`]) and integrates the membrane yarn part τ ψ_y(Ẽ_m)
+//! at one point per face, the face centre, weighted by the face's rest area; the shear term
+//! and all bending stay on the full rule. Per Gauss point the section is the whole one minus
+//! τ ψ_y(Ẽ_m), so the paper's section keeps its yarn bending (∫ψ_y(Ẽ_m + ξẼ_b) − τ ψ_y(Ẽ_m))
+//! and bending of its own keeps exactly its rigidities. A homogeneous strain gives the same
+//! energy under either rule (the weights of both sum to the face area). What is lost is only
+//! the yarn part's variation across a face, which is what locks; the modes it frees are held
+//! by the shear term and the bending (the stiffness matrix stays definite at rest).
+
+use super::{Accumulator, FaceScratch, ModelError, ShellModel, Want};
+use crate::material::OutOfDomain;
+use crate::shell::{kinematic_vector, RestPoint};
+use crate::subdiv::{LimitBasis, StencilTable};
+use crate::Vec3;
+
+/// How the yarn (warp, weft, a₁₂) terms of the membrane are integrated over a face.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum YarnRule {
+    /// The full Gauss rule, like every other term (the paper's discretisation).
+    #[default]
+    Full,
+    /// One point per face, the centre, weighted by the face's rest area.
+    Centre,
+}
+
+/// Which part of the section a point carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Part {
+    /// The whole section.
+    Whole,
+    /// The whole section less τ ψ_y(Ẽ_m) (a full-rule point under [`YarnRule::Centre`]).
+    LessYarn,
+    /// τ ψ_y(Ẽ_m) alone (a face centre).
+    Yarn,
+}
+
+/// The face centres of [`YarnRule::Centre`].
+pub(super) struct Centres {
+    /// One limit stencil per face, at (½, ½).
+    pub stencils: StencilTable,
+    /// Rest frames at the centres, d_area the face's rest area.
+    pub rest: Vec<RestPoint>,
+    /// Position of every stencil entry in its face's node list.
+    pub local_index: Vec<u16>,
+}
+
+impl ShellModel {
+    /// Chooses how the yarn terms are integrated (see the module doc).
+    pub fn set_yarn_rule(&mut self, rule: YarnRule) -> Result<(), ModelError> {
+        self.centres = match rule {
+            YarnRule::Full => None,
+            YarnRule::Centre => Some(self.build_centres()?),
+        };
+        Ok(())
+    }
+
+    pub fn yarn_rule(&self) -> YarnRule {
+        if self.centres.is_some() {
+            YarnRule::Centre
+        } else {
+            YarnRule::Full
+        }
+    }
+
+    fn build_centres(&self) -> Result<Centres, ModelError> {
+        let one = LimitBasis::from_surface(self.basis.surface(), 1)
+            .map_err(|e| ModelError::Centre(e.to_string()))?;
+        let npf = self.basis.points_per_face;
+        let x = &self.basis.control_points;
+        let mut rest = Vec::with_capacity(one.num_faces);
+        let mut local_index = vec![0u16; one.stencils.indices.len()];
+        for face in 0..one.num_faces {
+            let area: f64 = self.rest[face * npf..(face + 1) * npf]
+                .iter()
+                .map(|r| r.d_area)
+                .sum();
+            let p = one.limit_stencil(face).apply(x);
+            let mut r =
+                RestPoint::new(&p.d, 1.0, self.warp).map_err(|source| ModelError::Rest {
+                    point: face * npf,
+                    source,
+                })?;
+            r.d_area = area;
+            rest.push(r);
+            let nodes = &self.face_nodes[face];
+            let off = one.stencils.offsets[face] as usize;
+            for (k, i) in one.stencil(face).0.iter().enumerate() {
+                let at = nodes.binary_search(i).map_err(|_| {
+                    ModelError::Centre(format!(
+                        "face {face}: the centre's stencil reaches control point {i}, \
+                         outside the face's Gauss-point stencils"
+                    ))
+                })?;
+                local_index[off + k] = at as u16;
+            }
+        }
+        Ok(Centres {
+            stencils: one.stencils,
+            rest,
+            local_index,
+        })
+    }
+
+    /// Adds the yarn terms of `face`'s centre (nothing under the full rule).
+    #[inline(always)]
+    pub(super) fn centre_terms(
+        &self,
+        face: usize,
+        x: &[Vec3],
+        want: Want,
+        acc: &mut Accumulator,
+        s: &mut FaceScratch,
+    ) -> Result<(), OutOfDomain> {
+        let Some(c) = &self.centres else {
+            return Ok(());
+        };
+        let (idx, w) = c.stencils.row(face);
+        let off = c.stencils.offsets[face] as usize;
+        let local = &c.local_index[off..off + idx.len()];
+        let mut d = [[0.0; 3]; 6];
+        for (&i, wi) in idx.iter().zip(w) {
+            let p = x[i as usize];
+            for k in 1..6 {
+                for c in 0..3 {
+                    d[k][c] += wi[k] * p[c];
+                }
+            }
+        }
+        let y = kinematic_vector(&d);
+        let (e, gy, hy) = self.rest_point_terms(&c.rest[face], &y, want, Part::Yarn)?;
+        acc.energy += e;
+        self.scatter(
+            idx,
+            w,
+            local,
+            self.face_nodes[face].len(),
+            &gy,
+            hy,
+            want,
+            acc,
+            s,
+        );
+        Ok(())
+    }
+
+    /// The centre's kinematic vector and rest frame of `face`, when the yarns are on centres.
+    pub(super) fn centre_kinematics(
+        &self,
+        face: usize,
+        x: &[Vec3],
+    ) -> Option<(&[u32], &[[f64; 6]], crate::shell::YVec, &RestPoint)> {
+        let c = self.centres.as_ref()?;
+        let (idx, w) = c.stencils.row(face);
+        let mut d = [[0.0; 3]; 6];
+        for (&i, wi) in idx.iter().zip(w) {
+            for k in 1..6 {
+                for e in 0..3 {
+                    d[k][e] += wi[k] * x[i as usize][e];
+                }
+            }
+        }
+        Some((idx, w, kinematic_vector(&d), &c.rest[face]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{Cutoffs, Eta, Orthotropic};
+    use crate::mesh::graded_grid;
+    use crate::subdiv::BasisOptions;
+    use std::sync::Arc;
+
+    fn law() -> Orthotropic {
+        Orthotropic {
+            a11: 1.0e9,
+            a22: 6.0e8,
+            a12: 2.0e7,
+            g12: 1.0e5,
+            warp: Eta {
+                mu: vec![0.6, 0.4],
+                alpha: vec![1.0, 8.0],
+            },
+            weft: Eta::linear(),
+            shear: Eta {
+                mu: vec![1.5, -0.5],
+                alpha: vec![2.0, -2.0],
+            },
+            cutoffs: Cutoffs::none(),
+        }
+    }
+
+    fn model(rule: YarnRule) -> ShellModel {
+        let mesh = graded_grid(0.05, 0.075, 4, 6, crate::mesh::Grading::UNIFORM);
+        let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
+        let warp = crate::scene::warp_direction(45.0);
+        let mut m = ShellModel::new(basis, warp, Arc::new(law()), 3e-4, 0.1).unwrap();
+        m.set_yarn_rule(rule).unwrap();
+        m
+    }
+
+    /// A homogeneous in-plane strain costs the same under either rule (the centre weights sum
+    /// to each face's area), while a strain that varies across the faces does not.
+    #[test]
+    fn both_rules_agree_on_homogeneous_strains_only() {
+        let (full, centre) = (model(YarnRule::Full), model(YarnRule::Centre));
+        assert_eq!(centre.yarn_rule(), YarnRule::Centre);
+        let x0 = &full.basis.control_points;
+        let affine: Vec<Vec3> = x0
+            .iter()
+            .map(|p| [1.03 * p[0] + 0.02 * p[1], 0.99 * p[1] - 0.01 * p[0], p[2]])
+            .collect();
+        let (a, b) = (
+            full.energy(&affine).unwrap(),
+            centre.energy(&affine).unwrap(),
+        );
+        assert!(a > 0.0 && (a - b).abs() <= 1e-12 * a, "{a} {b}");
+        let bent: Vec<Vec3> = x0
+            .iter()
+            .map(|p| [p[0] * (1.0 + 0.5 * p[1]), p[1], p[2]])
+            .collect();
+        let (a, b) = (full.energy(&bent).unwrap(), centre.energy(&bent).unwrap());
+        assert!((a - b).abs() > 1e-6 * a, "{a} {b}");
+    }
+
+    /// The centre rule leaves the stiffness at rest definite once rigid motions are held
+    /// (three corners' positions): no zero-energy mode appears.
+    #[test]
+    fn the_centre_rule_has_no_zero_energy_mode() {
+        let m = model(YarnRule::Centre);
+        let x = m.basis.control_points.clone();
+        let mut h = super::super::BlockMatrix::zeros(m.pattern.clone());
+        let mut g = vec![[0.0; 3]; m.num_nodes()];
+        m.assemble(&x, Want::Hessian, Some(&mut g), Some(&mut h))
+            .unwrap();
+        let n = 3 * m.num_nodes();
+        let mut dense = nalgebra::DMatrix::<f64>::zeros(n, n);
+        for i in 0..m.num_nodes() {
+            let mut e = vec![[0.0; 3]; m.num_nodes()];
+            for c in 0..3 {
+                e[i][c] = 1.0;
+                let mut col = vec![[0.0; 3]; m.num_nodes()];
+                h.mul(&e, &mut col);
+                for (j, v) in col.iter().enumerate() {
+                    for d in 0..3 {
+                        dense[(3 * j + d, 3 * i + c)] = v[d];
+                    }
+                }
+                e[i][c] = 0.0;
+            }
+        }
+        // hold rigid motions: three nodes fully (more than enough), the rest free
+        let last = m.num_nodes() - 1;
+        let held: Vec<usize> = [0, 1, last]
+            .iter()
+            .flat_map(|&i| 3 * i..3 * i + 3)
+            .collect();
+        let free: Vec<usize> = (0..n).filter(|k| !held.contains(k)).collect();
+        let k = dense.select_rows(&free).select_columns(&free);
+        let eig = nalgebra::SymmetricEigen::new(k).eigenvalues;
+        let (lo, hi) = eig
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        assert!(lo > 1e-14 * hi, "smallest eigenvalue {lo:e} of {hi:e}");
+    }
+}
