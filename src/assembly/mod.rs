@@ -20,7 +20,7 @@ mod reduced;
 mod section;
 mod sensitivities;
 pub use blocks::{BlockMatrix, BlockPattern};
-pub use reduced::YarnRule;
+pub use reduced::{YarnRule, CENTRE_FROM_RATIO};
 pub use sensitivities::BENDING_PARAMS;
 
 use crate::material::{BendingRigidity, Law, OutOfDomain};

@@ -29,13 +29,13 @@ pub(super) fn ladder(
         let from = meshes.last().copied().unwrap_or(level);
         // is this level worth it? the last measured refit change, carried one level finer
         if let (Some(m), true) = (&last_check, li >= 2) {
-            let estimate = m.next_level(order(opts.grading));
+            let estimate = m.next_level(order(opts.grading, f.yarns()));
             if estimate.passes() {
                 let note = format!(
                     "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
                     level.0, level.1, from.0, from.1, m.parameter,
                     100.0 * estimate.change, 100.0 * estimate.curve_change,
-                    100.0 * m.change, 100.0 * m.curve_change, order(opts.grading)
+                    100.0 * m.change, 100.0 * m.curve_change, order(opts.grading, f.yarns())
                 );
                 f.say(&note);
                 f.notes.push(note);

@@ -45,9 +45,13 @@ pub enum MeshCheckMode {
 /// on the fit's strips, so that the estimate errs on the large side. Graded cages
 /// ([`crate::scene::STRIP_GRADING`]): 2 (the 45° strip converges at 2.1–2.6 on them, `cargo
 /// run --release --example graded_strip`); uniform cages: 1.2 (the 45° strip's clamped corners,
-/// `paper_repro/convergence/tensile_45.txt`: 1.2–1.3).
-pub fn order(grading: crate::mesh::Grading) -> f64 {
-    if grading.across >= 0.5 && grading.along >= 0.5 {
+/// `paper_repro/convergence/tensile_45.txt`: 1.2–1.3). Yarn terms on the face centres
+/// ([`crate::assembly::YarnRule::Centre`], nearly inextensible yarns): 0.8 (a stiff-yarn bias
+/// strip converges at 0.8–0.9 on graded cages, `paper_repro/convergence/stiff_bias`).
+pub fn order(grading: crate::mesh::Grading, yarns: crate::assembly::YarnRule) -> f64 {
+    if yarns == crate::assembly::YarnRule::Centre {
+        0.8
+    } else if grading.across >= 0.5 && grading.along >= 0.5 {
         2.0
     } else {
         1.2
@@ -304,7 +308,10 @@ impl Fitter<'_> {
         // the defect towards the solved mesh, and the factor that makes it the one to `finer`
         let (solved_on, factor) = match mode {
             MeshCheckMode::Fine => (finer, 1.0),
-            _ => (coarse, -(2f64.powf(-order(self.opts.grading)))),
+            _ => (
+                coarse,
+                -(2f64.powf(-order(self.opts.grading, self.yarns()))),
+            ),
         };
         self.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
@@ -447,7 +454,7 @@ impl Fitter<'_> {
                 "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
                 m.solved_on.0,
                 m.solved_on.1,
-                order(self.opts.grading),
+                order(self.opts.grading, self.yarns()),
                 m.mesh.0,
                 m.mesh.1
             )

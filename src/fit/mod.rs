@@ -128,6 +128,8 @@ pub struct FitOptions {
     /// Each strip refined on its own until its mesh error meets its tolerance, or every strip
     /// on the ladder's level ([`TestMeshes`]).
     pub test_meshes: TestMeshes,
+    /// How every solve integrates the yarn terms (`Auto`: decided once after the bootstrap).
+    pub yarn_rule: crate::assembly::YarnRule,
 }
 
 impl Default for FitOptions {
@@ -154,6 +156,7 @@ impl Default for FitOptions {
             mesh_check: MeshCheckMode::default(),
             grading: crate::scene::STRIP_GRADING,
             test_meshes: TestMeshes::Own,
+            yarn_rule: crate::assembly::YarnRule::Auto,
         }
     }
 }
@@ -349,6 +352,8 @@ struct Fitter<'a> {
     rigs: HashMap<RigKey, StripRig>,
     /// node forces already predicted, by strip and parameter bits
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
+    /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
+    yarns: Option<crate::assembly::YarnRule>,
 }
 
 impl Fitter<'_> {
@@ -575,6 +580,7 @@ pub fn fit(
         ladder_meshes: false,
         rigs: Default::default(),
         predictions: Default::default(),
+        yarns: None,
     };
     let dirs = [Direction::Warp, Direction::Weft, Direction::Shear];
     let strips: Vec<Vec<usize>> = dirs.iter().map(|&d| f.stage_strips(d)).collect();
@@ -601,6 +607,7 @@ pub fn fit(
         }));
     }
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
+    f.decide_yarns();
     let meshes = ladder::ladder(&mut f, &maps, &strips, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
     // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist

@@ -86,7 +86,7 @@ impl Fitter<'_> {
         let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
         let fine = self.predict_many(&jobs, last)?;
         let rough = self.predict_many(&jobs, half)?;
-        let order = super::mesh_check::order(self.opts.grading);
+        let order = super::mesh_check::order(self.opts.grading, self.yarns());
         let mut out = Vec::new();
         for (s, strip) in self.prep.strips.iter().enumerate() {
             let mut worst = StripCheck {

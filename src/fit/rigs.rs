@@ -4,6 +4,7 @@
 
 use super::preprocess::interpolation_weights;
 use super::{FitError, Fitter, RigKey, FIT_RTOL, NEAR_ANGLE_DEG};
+use crate::assembly::YarnRule;
 use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig, TensileStrip};
 
@@ -35,6 +36,34 @@ pub(super) fn node_force(p: &crate::scene::TensilePoint) -> f64 {
 }
 
 impl Fitter<'_> {
+    /// The yarn rule of every solve of the fit: `--yarn-rule`, with `auto` decided once by
+    /// the law after the bootstrap ([`Fitter::decide_yarns`]; the full rule before).
+    pub(super) fn yarns(&self) -> YarnRule {
+        self.yarns.unwrap_or(YarnRule::Full)
+    }
+
+    /// Decides `--yarn-rule auto` by the bootstrapped law's yarn-to-shear ratio, so that
+    /// every strip and bend of the fit shares one discretisation, and says so.
+    pub(super) fn decide_yarns(&mut self) {
+        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        let rule = self.opts.yarn_rule.resolve(ratio);
+        self.yarns = Some(rule);
+        if rule == YarnRule::Centre {
+            let why = match self.opts.yarn_rule {
+                YarnRule::Auto => format!(
+                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, at least {:.0})",
+                    ratio.unwrap_or(f64::NAN),
+                    crate::assembly::CENTRE_FROM_RATIO
+                ),
+                _ => String::new(),
+            };
+            self.notes.push(format!(
+                "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
+                super::mesh_check::order(self.opts.grading, rule)
+            ));
+        }
+    }
+
     /// The rig of strip `s` cut at `angle` on a mesh level: from the cache (warm) or set up;
     /// hand it back with [`Fitter::keep_rig`].
     pub(super) fn strip_rig(
@@ -52,6 +81,7 @@ impl Fitter<'_> {
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
         t.grading = self.opts.grading;
+        t.yarn_rule = self.yarns();
         // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
         t.solver.max_iterations = 500;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off

@@ -95,6 +95,7 @@ impl Fitter<'_> {
             let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
             t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
             t.grading = self.opts.grading;
+            t.yarn_rule = self.yarns();
             t.solver.max_iterations = 500;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
@@ -150,7 +151,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     // each strip's discretisation error: the last level against one with half the faces
     // each way, at the slowest order measured on the cage (the 45° strip's clamped corners:
     // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
-    let order = super::mesh_check::order(f.opts.grading);
+    let order = super::mesh_check::order(f.opts.grading, f.yarns());
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
     f.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",
@@ -274,6 +275,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         f.bend_angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+            bend.yarn_rule = f.yarns();
             bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
             let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
                 stage: format!("predicting the {}° cantilever", b.angle_deg),

@@ -60,6 +60,12 @@ pub trait Law: Send + Sync {
         Ok(r)
     }
 
+    /// max(a₁₁, a₂₂)/G₁₂ at zero strain, the ratio that decides [`crate::assembly::YarnRule::Auto`]
+    /// (`None`: not an orthotropic law of yarns and shear; the full rule is kept).
+    fn yarn_shear_ratio(&self) -> Option<f64> {
+        None
+    }
+
     /// [`Law::param_response`] of the yarn part [`Law::yarn_response`].
     fn yarn_param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain> {
         let mut r = self.param_response(&Vector3::new(e[0], e[1], 0.0))?;
@@ -110,6 +116,10 @@ impl OrthotropicStvk {
 }
 
 impl Law for OrthotropicStvk {
+    fn yarn_shear_ratio(&self) -> Option<f64> {
+        (self.g12 > 0.0).then(|| self.a11.max(self.a22) / self.g12)
+    }
+
     fn param_names(&self) -> Vec<String> {
         ["a11", "a22", "a12", "g12"]
             .iter()

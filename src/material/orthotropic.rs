@@ -307,6 +307,11 @@ impl From<super::OrthotropicStvk> for Orthotropic {
 }
 
 impl Law for Orthotropic {
+    /// The zero-strain moduli (η'(0) = 1): max(a₁₁, a₂₂)/G₁₂.
+    fn yarn_shear_ratio(&self) -> Option<f64> {
+        (self.g12 > 0.0).then(|| self.a11.max(self.a22) / self.g12)
+    }
+
     fn param_names(&self) -> Vec<String> {
         self.names()
     }

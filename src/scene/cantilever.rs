@@ -5,7 +5,7 @@
 use super::{
     build_model, edge_clamp, equilibrium, free_system, positive, EdgeClamp, Hold, SceneError,
 };
-use crate::assembly::{ShellModel, STANDARD_GRAVITY};
+use crate::assembly::{ShellModel, YarnRule, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
 use crate::solve::{
@@ -199,6 +199,8 @@ pub struct CantileverBend {
     pub solver: NewtonOptions,
     /// Raise the load gradually (default); otherwise apply it all in one solve.
     pub continuation: bool,
+    /// How the yarn terms are integrated ([`YarnRule::Auto`] by default).
+    pub yarn_rule: YarnRule,
 }
 
 /// The measured bend.
@@ -242,6 +244,7 @@ impl CantileverBend {
             in_plane: false,
             solver: NewtonOptions::default(),
             continuation: true,
+            yarn_rule: YarnRule::Auto,
         }
     }
 
@@ -259,12 +262,12 @@ impl CantileverBend {
         }
         let model = build_model(
             material,
-            self.width,
-            self.overhang,
+            (self.width, self.overhang),
             self.angle_deg,
             self.mesh,
             self.boundary,
             Grading::UNIFORM,
+            self.yarn_rule,
         )?;
         let clamp = edge_clamp(
             &model,

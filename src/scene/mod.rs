@@ -25,7 +25,7 @@ pub use drape::{Drape, DrapeShape};
 pub use frame::{Deformed, FramePoint, PictureFrame};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING};
 
-use crate::assembly::{ModelError, ShellModel};
+use crate::assembly::{ModelError, ShellModel, YarnRule};
 use crate::material::FabricMaterial;
 use crate::mesh::{graded_grid, Grading};
 use crate::solve::{newton, FreeSystem, NewtonOptions, Slave, SolveError, SolveReport};
@@ -93,14 +93,16 @@ fn positive(name: &str, v: f64) -> Result<f64, SceneError> {
     }
 }
 
+/// The shell of a `width` × `length` sheet whose warp lies at `angle_deg`, on an `nx` × `ny`
+/// cage with the given boundary rule, grading and yarn rule.
 fn build_model(
     material: &FabricMaterial,
-    width: f64,
-    length: f64,
+    (width, length): (f64, f64),
     angle_deg: f64,
     (nx, ny): (usize, usize),
     boundary: BoundaryRule,
     grading: Grading,
+    yarns: YarnRule,
 ) -> Result<ShellModel, SceneError> {
     if !grading.is_valid() {
         return Err(SceneError::Input(format!(
@@ -135,6 +137,7 @@ fn build_model(
         material.areal_density,
     )?;
     model.set_bending(material.bending);
+    model.set_yarn_rule(yarns)?;
     Ok(model)
 }
 

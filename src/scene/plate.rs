@@ -13,6 +13,7 @@
 //!   with m(−1) = m(0) = 1, f(−1) = 1, f(0) = −½, and mirrored at the far edges.
 
 use super::{build_model, equilibrium, free_system, SceneError};
+use crate::assembly::YarnRule;
 use crate::material::{FabricMaterial, OrthotropicStvk};
 use crate::mesh::Grading;
 use crate::solve::{NewtonOptions, Slave};
@@ -68,7 +69,15 @@ impl SquarePlate {
             Support::Simple => BoundaryRule::Phantom,
             Support::Clamped => BoundaryRule::Ghost,
         };
-        let mut model = build_model(&material, a, a, 90.0, (n, n), rule, Grading::UNIFORM)?;
+        let mut model = build_model(
+            &material,
+            (a, a),
+            90.0,
+            (n, n),
+            rule,
+            Grading::UNIFORM,
+            YarnRule::Full,
+        )?;
         model.set_gravity([0.0, 0.0, -g]);
         let x0 = model.basis.control_points.clone();
         let h = a / n as f64;

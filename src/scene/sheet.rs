@@ -10,7 +10,7 @@
 
 use super::export::SurfaceMesh;
 use super::{build_model, SceneError};
-use crate::assembly::{ShellModel, Want};
+use crate::assembly::{ShellModel, Want, YarnRule};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
 use crate::model::ClothModel;
@@ -67,12 +67,12 @@ impl Sheet<ShellModel> {
         super::positive("sheet side", side)?;
         let model = build_model(
             material,
-            side,
-            side,
+            (side, side),
             0.0,
             (n, n),
             BoundaryRule::Phantom,
             Grading::UNIFORM,
+            YarnRule::Auto,
         )?;
         let rest = model.basis.control_points.clone();
         Self::from_parts(model, side, n, rest)

@@ -2,7 +2,7 @@
 //! run again with new material parameters, with force sensitivities: the fitter's forward model).
 
 use super::{build_model, default_mesh, edge_clamp, free_system, positive, Hold, SceneError};
-use crate::assembly::ShellModel;
+use crate::assembly::{ShellModel, YarnRule};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
 use crate::solve::{FreeSystem, NewtonOptions, Slave, SolveError, SolveReport};
@@ -26,6 +26,9 @@ pub struct TensileStrip {
     /// default)
     pub grading: Grading,
     pub solver: NewtonOptions,
+    /// How the yarn terms are integrated ([`YarnRule::Auto`] by default: on the face centres
+    /// for nearly inextensible yarns, whose bias strips lock on the full rule).
+    pub yarn_rule: YarnRule,
 }
 
 /// The measured choice of strip cage grading (`--grading 0.8,0.8`): control lines crowded
@@ -65,6 +68,7 @@ impl TensileStrip {
             boundary: BoundaryRule::Phantom,
             grading: Grading::UNIFORM,
             solver: NewtonOptions::default(),
+            yarn_rule: YarnRule::Auto,
         }
     }
 
@@ -105,12 +109,12 @@ impl TensileStrip {
         let (_, ny) = self.mesh;
         let model = build_model(
             material,
-            self.width,
-            self.length,
+            (self.width, self.length),
             self.angle_deg,
             self.mesh,
             self.boundary,
             self.grading,
+            self.yarn_rule,
         )?;
         let nn = model.num_nodes();
         let side = (self.width, self.length);

@@ -90,7 +90,7 @@ impl LabModel {
         &self,
         (width, gauge, angle): (f64, f64, f64),
         mesh: (usize, usize),
-        grading: crate::mesh::Grading,
+        (grading, yarns): (crate::mesh::Grading, crate::assembly::YarnRule),
         elongations: &[f64],
     ) -> Result<Vec<(f64, bool)>, SceneError> {
         match self {
@@ -98,6 +98,7 @@ impl LabModel {
                 let mut strip = TensileStrip::new(width, gauge, angle);
                 strip.mesh = mesh;
                 strip.grading = grading;
+                strip.yarn_rule = yarns;
                 // thin off-axis strips wrinkle: allow the backward-Euler fallback time to
                 // settle them
                 strip.solver.max_iterations = 500;

@@ -97,6 +97,9 @@ pub struct SynthOptions {
     pub mesh: (usize, usize),
     /// Its grading (uniform by default; see [`crate::scene::STRIP_GRADING`]).
     pub grading: crate::mesh::Grading,
+    /// How the strips integrate the yarn terms (auto by default; the cantilevers always
+    /// decide by the material).
+    pub yarn_rule: crate::assembly::YarnRule,
 }
 
 impl Default for SynthOptions {
@@ -110,6 +113,7 @@ impl Default for SynthOptions {
             seed: 1,
             mesh: (16, 24),
             grading: crate::mesh::Grading::UNIFORM,
+            yarn_rule: crate::assembly::YarnRule::Auto,
         }
     }
 }
@@ -292,7 +296,12 @@ fn synth_tensile(
         .collect();
     let run_strip = |angle: f64, test: &str| -> Result<Vec<f64>, SynthError> {
         let curve = lab
-            .strip((width, gauge, angle), opts.mesh, opts.grading, &elongations)
+            .strip(
+                (width, gauge, angle),
+                opts.mesh,
+                (opts.grading, opts.yarn_rule),
+                &elongations,
+            )
             .map_err(|source| SynthError::Scene {
                 test: test.to_string(),
                 source,

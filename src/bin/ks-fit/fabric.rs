@@ -453,6 +453,11 @@ pub fn cmd_synth(
             "--grading applies to the kl model's strip cage, not to --model {model}"
         ));
     }
+    if model != "kl" && opts.yarn_rule != kshell::assembly::YarnRule::Auto {
+        return Err(format!(
+            "--yarn-rule applies to the kl model's limit surface, not to --model {model}"
+        ));
+    }
     let lab = lab_model(material, model)?;
     let mut guard = Guard::new(force);
     guard.input(material);
@@ -462,7 +467,7 @@ pub fn cmd_synth(
         kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
     let comment = format!(
         "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
-         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{}\n\
+         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{} --yarn-rule {}\n\
          tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees{}",
         material.display(),
         lab.model_name(),
@@ -476,6 +481,7 @@ pub fn cmd_synth(
         opts.mesh.1,
         opts.grading.across,
         opts.grading.along,
+        opts.yarn_rule.name(),
         data.notes
             .iter()
             .map(|n| format!("\n{n}"))

@@ -266,6 +266,12 @@ enum Command {
         /// `[[fit.test]]` mesh names each test's real mesh.
         #[arg(long, value_enum, default_value = "own")]
         test_meshes: kshell::fit::TestMeshes,
+        /// How every solve integrates the yarn (warp, weft, a12) terms: full (4 × 4 Gauss
+        /// points per face), centre (one point per face: no locking on nearly inextensible
+        /// yarns) or auto (centre when the bootstrapped yarn-to-shear ratio max(a11, a22)/G12
+        /// is 200 or more; a note says so).
+        #[arg(long, default_value = "auto")]
+        yarn_rule: kshell::assembly::YarnRule,
         /// Cloth model fitted: kl (the subdivision shell, everything above applies), or a
         /// triangle model (springs, soft-constraints, stvk-ds, xpbd), fitted in Miguel et al.
         /// 2012's staged order on 16-faces-wide strips (default output
@@ -318,6 +324,11 @@ enum Command {
         /// bias strip's force 4–6 times more accurate on the same mesh).
         #[arg(long, value_parser = parse_grading, default_value = "0")]
         grading: kshell::mesh::Grading,
+        /// How the strips integrate the yarn terms: auto, full or centre (see `fit
+        /// --yarn-rule`; auto decides by the material's yarn-to-shear ratio, as the
+        /// cantilevers always do).
+        #[arg(long, default_value = "auto")]
+        yarn_rule: kshell::assembly::YarnRule,
         /// Model the virtual lab runs: kl (the subdivision shell) or a triangle model
         /// (springs, soft-constraints, stvk-ds, xpbd) from the file's [model] table or converted
         /// from its shell law: data another discretisation made, to fit with any model.
@@ -466,6 +477,7 @@ fn main() -> ExitCode {
             mesh_check,
             grading,
             test_meshes,
+            yarn_rule,
             model: _,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
@@ -485,6 +497,7 @@ fn main() -> ExitCode {
             mesh_check,
             grading,
             test_meshes,
+            yarn_rule,
             ..opts
         })
         .and_then(|opts| {
@@ -512,6 +525,7 @@ fn main() -> ExitCode {
             seed,
             mesh,
             grading,
+            yarn_rule,
             model,
         } => cmd_synth(
             &material,
@@ -526,6 +540,7 @@ fn main() -> ExitCode {
                 seed,
                 mesh,
                 grading,
+                yarn_rule,
             },
             force,
         )

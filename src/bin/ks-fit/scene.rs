@@ -27,6 +27,12 @@ pub struct SceneArgs {
     /// 0.8,0.8 makes a bias strip's force 4–6 times more accurate on the same mesh).
     #[arg(long, value_parser = crate::parse_grading)]
     pub grading: Option<kshell::mesh::Grading>,
+    /// How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per
+    /// face), centre (one point per face: a membrane that does not lock when the yarns are
+    /// nearly inextensible and cross the cage), or auto (centre from a yarn-to-shear ratio
+    /// max(a11, a22)/G12 of 200).
+    #[arg(long, default_value = "auto")]
+    pub yarn_rule: kshell::assembly::YarnRule,
     /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape
     /// angle (default 0.05; three meshes of elements about 6.25 mm, then twice and four times
     /// as fine), for `tensile` the relative force error over the curve (default 0.003, i.e.
@@ -63,9 +69,12 @@ impl SceneArgs {
             return Ok(None);
         }
         let kind = self.model.parse().map_err(|e| format!("--model: {e}"))?;
-        if self.boundary.is_some() || self.grading.is_some() {
+        if self.boundary.is_some()
+            || self.grading.is_some()
+            || self.yarn_rule != kshell::assembly::YarnRule::Auto
+        {
             return Err(format!(
-                "--boundary and --grading apply to the kl model's limit surface, not to --model {}",
+                "--boundary, --grading and --yarn-rule apply to the kl model's limit surface, not to --model {}",
                 self.model
             ));
         }
@@ -148,6 +157,9 @@ pub struct StudyArgs {
     /// Strip cage grading, "across,along" (tensile studies; default 0: uniform).
     #[arg(long, value_parser = crate::parse_grading)]
     grading: Option<kshell::mesh::Grading>,
+    /// How the yarn terms are integrated: auto, full or centre (see `tensile --yarn-rule`).
+    #[arg(long, default_value = "auto")]
+    yarn_rule: kshell::assembly::YarnRule,
 }
 
 /// One line describing a solve, for --verbose.
@@ -231,6 +243,7 @@ pub fn cmd_tensile(
     let mat = load_material(material).map_err(|e| e.to_string())?;
     let mut strip = TensileStrip::new(w, l, angle);
     strip.grading = args.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
+    strip.yarn_rule = args.yarn_rule;
     if let Some(b) = args.boundary {
         strip.boundary = b;
     }
@@ -344,6 +357,7 @@ pub fn cmd_bend(
     if let Some(b) = args.boundary {
         bend.boundary = b;
     }
+    bend.yarn_rule = args.yarn_rule;
     bend.solver = args.solver();
     let r = match args.mesh {
         Some(_) => bend.run(&mat).map_err(|e| e.to_string())?,
@@ -500,6 +514,7 @@ pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
                     let mut strip = TensileStrip::new(w, l, *angle);
                     strip.mesh = mesh;
                     strip.grading = a.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
+                    strip.yarn_rule = a.yarn_rule;
                     if let Some(b) = a.boundary {
                         strip.boundary = b;
                     }
@@ -531,6 +546,7 @@ pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
                     if let Some(b) = a.boundary {
                         bend.boundary = b;
                     }
+                    bend.yarn_rule = a.yarn_rule;
                     let r = bend
                         .run(&mat)
                         .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;

@@ -32,9 +32,10 @@ impl SceneMaterial {
 }
 
 /// A scene's final state.
+/// (Boxed: the deformed models are large, and a shape is moved around whole.)
 pub enum Shape {
-    Shell(Deformed),
-    Tri(Deformed<TriModel>),
+    Shell(Box<Deformed>),
+    Tri(Box<Deformed<TriModel>>),
 }
 
 impl Shape {

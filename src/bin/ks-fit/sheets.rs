@@ -225,9 +225,11 @@ fn run_kind(
                 ..Drape::new()
             };
             let (s, shape) = match (material, material.tri(drape.side / mesh as f64)?) {
-                (_, Some(t)) => drape.run_tri(&t).map(|(s, d)| (s, Shape::Tri(d)))?,
+                (_, Some(t)) => drape
+                    .run_tri(&t)
+                    .map(|(s, d)| (s, Shape::Tri(Box::new(d))))?,
                 (SceneMaterial::Shell(m), None) => {
-                    drape.run(m).map(|(s, d)| (s, Shape::Shell(d)))?
+                    drape.run(m).map(|(s, d)| (s, Shape::Shell(Box::new(d))))?
                 }
                 _ => unreachable!("a triangle material has parameters"),
             };
@@ -248,9 +250,11 @@ fn run_kind(
                 ..PictureFrame::new(0.1, shear_deg)
             };
             let (points, shape) = match (material, material.tri(frame.side / mesh as f64)?) {
-                (_, Some(t)) => frame.run_tri(&t).map(|(p, d)| (p, Shape::Tri(d)))?,
+                (_, Some(t)) => frame
+                    .run_tri(&t)
+                    .map(|(p, d)| (p, Shape::Tri(Box::new(d))))?,
                 (SceneMaterial::Shell(m), None) => {
-                    frame.run(m).map(|(p, d)| (p, Shape::Shell(d)))?
+                    frame.run(m).map(|(p, d)| (p, Shape::Shell(Box::new(d))))?
                 }
                 _ => unreachable!("a triangle material has parameters"),
             };
@@ -273,9 +277,11 @@ fn run_kind(
                 ..CornerPull::new(0.1, stretch / 100.0)
             };
             let (points, shape) = match (material, material.tri(pull.side / mesh as f64)?) {
-                (_, Some(t)) => pull.run_tri(&t).map(|(p, d)| (p, Shape::Tri(d)))?,
+                (_, Some(t)) => pull
+                    .run_tri(&t)
+                    .map(|(p, d)| (p, Shape::Tri(Box::new(d))))?,
                 (SceneMaterial::Shell(m), None) => {
-                    pull.run(m).map(|(p, d)| (p, Shape::Shell(d)))?
+                    pull.run(m).map(|(p, d)| (p, Shape::Shell(Box::new(d))))?
                 }
                 _ => unreachable!("a triangle material has parameters"),
             };
