@@ -199,7 +199,8 @@ pub struct CantileverBend {
     pub solver: NewtonOptions,
     /// Raise the load gradually (default); otherwise apply it all in one solve.
     pub continuation: bool,
-    /// How the yarn terms are integrated ([`YarnRule::Auto`] by default).
+    /// How the yarn terms are integrated ([`YarnRule::Auto`] by default, which is the full
+    /// rule in a bend: [`YarnRule::for_bending`]).
     pub yarn_rule: YarnRule,
 }
 
@@ -267,7 +268,7 @@ impl CantileverBend {
             self.mesh,
             self.boundary,
             Grading::UNIFORM,
-            self.yarn_rule,
+            self.yarn_rule.for_bending(),
         )?;
         let clamp = edge_clamp(
             &model,

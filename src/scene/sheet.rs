@@ -72,7 +72,7 @@ impl Sheet<ShellModel> {
             (n, n),
             BoundaryRule::Phantom,
             Grading::UNIFORM,
-            YarnRule::Auto,
+            YarnRule::Auto.for_bending(),
         )?;
         let rest = model.basis.control_points.clone();
         Self::from_parts(model, side, n, rest)
