@@ -126,6 +126,21 @@ fn what_a_model_cannot_do_is_refused_clearly() {
         "--overhang",
         "40",
         "--model",
+        "xpbd",
+        "--yarn-rule",
+        "centre",
+    ]);
+    assert_eq!(rc, 2, "{err}");
+    assert!(err.contains("(as does --yarn-rule)"), "{err}");
+    let (rc, _, err) = ks_fit(&[
+        "bend",
+        "--material",
+        COTTON,
+        "--angle",
+        "90",
+        "--overhang",
+        "40",
+        "--model",
         "cloth",
     ]);
     assert_eq!(rc, 2, "{err}");

@@ -74,7 +74,7 @@ impl SceneArgs {
             || self.yarn_rule != kshell::assembly::YarnRule::Auto
         {
             return Err(format!(
-                "--boundary, --grading and --yarn-rule apply to the kl model's limit surface, not to --model {}",
+                "--boundary and --grading apply to the kl model's limit surface (as does --yarn-rule), not to --model {}",
                 self.model
             ));
         }
