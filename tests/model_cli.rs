@@ -99,39 +99,30 @@ fn what_a_model_cannot_do_is_refused_clearly() {
         err.contains("springs model needs its grid along the yarns"),
         "{err}"
     );
-    let (rc, _, err) = ks_fit(&[
-        "bend",
-        "--material",
-        COTTON,
-        "--angle",
-        "90",
-        "--overhang",
-        "40",
-        "--model",
-        "xpbd",
-        "--boundary",
-        "ghost",
-    ]);
-    assert_eq!(rc, 2, "{err}");
-    assert!(
-        err.contains("--boundary and --grading apply to the kl model"),
-        "{err}"
-    );
-    let (rc, _, err) = ks_fit(&[
-        "bend",
-        "--material",
-        COTTON,
-        "--angle",
-        "90",
-        "--overhang",
-        "40",
-        "--model",
-        "xpbd",
-        "--yarn-rule",
-        "centre",
-    ]);
-    assert_eq!(rc, 2, "{err}");
-    assert!(err.contains("(as does --yarn-rule)"), "{err}");
+    for (flag, value, says) in [
+        (
+            "--boundary",
+            "ghost",
+            "--boundary and --grading apply to the kl model",
+        ),
+        ("--yarn-rule", "centre", "(as does --yarn-rule)"),
+    ] {
+        let (rc, _, err) = ks_fit(&[
+            "bend",
+            "--material",
+            COTTON,
+            "--angle",
+            "90",
+            "--overhang",
+            "40",
+            "--model",
+            "xpbd",
+            flag,
+            value,
+        ]);
+        assert_eq!(rc, 2, "{err}");
+        assert!(err.contains(says), "{err}");
+    }
     let (rc, _, err) = ks_fit(&[
         "bend",
         "--material",

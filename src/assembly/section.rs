@@ -53,7 +53,8 @@ impl ShellModel {
             Part::LessYarn => self.whole_section(em, eb, want)?,
             Part::Yarn => Section::zero(),
         };
-        let sign = if part == Part::Yarn { 1.0 } else { -1.0 };
+        let moved = self.centres.as_ref().map_or(1.0, |c| c.moved);
+        let sign = if part == Part::Yarn { moved } else { -moved };
         let tau = sign * self.thickness;
         let r = self.law.yarn_response(em)?;
         s.energy += tau * r.psi;

@@ -87,8 +87,8 @@ impl ShellModel {
             } else {
                 self.paper_section_terms(&(&m, &b), nlaw, &want, &mut dey, &mut dgy)?;
             }
-            if self.centres.is_some() {
-                self.yarn_terms(&m, -1.0, nlaw, &want, &mut dey, &mut dgy)?;
+            if let Some(c) = &self.centres {
+                self.yarn_terms(&m, -c.moved, nlaw, &want, &mut dey, &mut dgy)?;
             }
             add_point(da, (idx, w), &dey, &dgy, &want, &mut energy, &mut gradient);
         }
@@ -99,7 +99,8 @@ impl ShellModel {
             let (m, _) = rest.strains(&y);
             let mut dey = vec![0.0; np];
             let mut dgy = vec![YVec::zeros(); np];
-            self.yarn_terms(&m, 1.0, nlaw, &want, &mut dey, &mut dgy)?;
+            let moved = self.centres.as_ref().map_or(1.0, |c| c.moved);
+            self.yarn_terms(&m, moved, nlaw, &want, &mut dey, &mut dgy)?;
             add_point(
                 rest.d_area,
                 (idx, w),
