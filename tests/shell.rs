@@ -487,3 +487,54 @@ fn edge_moment_gradient_and_hessian_match_differences() {
         }
     }
 }
+
+/// Nearly inextensible yarns do not lock on the centre rule. A 150 × 450 mm bias-extension
+/// sample at 45° (a11 = a22 = 1e10 Pa, a12 = 0, G12 = 3e4 Pa, τ = 0.3 mm) pulled 20 mm on
+/// 4 × 12 and 8 × 24 uniform cages. Reference: the pin-jointed net of the bias-extension test
+/// (Harrison et al. 2004 kinematics: inextensible yarns, no bending; shear angle
+/// γ = π/2 − 2 arccos((D + d)/(√2 D)), D = L − W, in the centre region, γ/2 in the four
+/// half-sheared triangles; energy τ G12 Σ area (½ sin γ)², force its derivative in d):
+/// 0.1738 N (`paper_repro/convergence/stiff_bias/reference.txt`). Measured: the centre rule
+/// (what `auto` picks here) 0.1719 and 0.1701 N, the full rule 12.70 and 2.036 N.
+#[test]
+fn stiff_yarns_on_face_centres_do_not_lock_in_bias_extension() {
+    let net = {
+        let (w, l, tau, g, d) = (0.15f64, 0.45f64, 3e-4, 3e4, 0.02);
+        let big_d = l - w;
+        let gamma = |d: f64| {
+            std::f64::consts::FRAC_PI_2 - 2.0 * ((big_d + d) / (2f64.sqrt() * big_d)).acos()
+        };
+        let energy = |d: f64| {
+            let g1 = gamma(d);
+            tau * g
+                * (w * (l - 1.5 * w) * (0.5 * g1.sin()).powi(2)
+                    + w * w * (0.5 * (0.5 * g1).sin()).powi(2))
+        };
+        (energy(d + 1e-6) - energy(d - 1e-6)) / 2e-6
+    };
+    assert!((net - 0.1738).abs() < 5e-5, "net {net}");
+    let mut m = fabric(
+        OrthotropicStvk {
+            a11: 1.0e10,
+            a22: 1.0e10,
+            a12: 0.0,
+            g12: 3.0e4,
+        },
+        3e-4,
+    );
+    m.areal_density = 0.3;
+    for mesh in [(4, 12), (8, 24)] {
+        let force = |rule: YarnRule| {
+            let mut strip = TensileStrip::new(0.15, 0.45, 45.0);
+            strip.mesh = mesh;
+            strip.yarn_rule = rule;
+            strip.run(&m, &[0.02]).unwrap()[0].force
+        };
+        let (auto, full) = (force(YarnRule::Auto), force(YarnRule::Full));
+        assert!(
+            (auto / net - 1.0).abs() < 0.03,
+            "{mesh:?}: auto (centre) {auto} N against the net's {net} N"
+        );
+        assert!(full > 5.0 * net, "{mesh:?}: the full rule {full} N");
+    }
+}
