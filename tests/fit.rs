@@ -655,6 +655,7 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     // every fitted strip meets its tolerance on its own mesh, which [[fit.test]] names, or is
     // warned about by name
     let f = own["fit"].as_table().unwrap();
+    assert_eq!(f["yarn_rule"].as_str(), Some("full"), "{f:?}");
     let notes: Vec<&str> = f["notes"]
         .as_array()
         .unwrap()

@@ -354,6 +354,7 @@ mod tests {
             max_error: 0.1,
             mesh_check: None,
             shapes_fitted: false,
+            yarn_rule: crate::assembly::YarnRule::Full,
         };
         let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
         let fig = Figure {

@@ -240,6 +240,8 @@ pub struct FitResult {
     pub mesh_check: Option<MeshCheck>,
     /// whether the captured shapes that shear the sheet fitted G12 ([`shapes`])
     pub shapes_fitted: bool,
+    /// how the strips integrated the yarn terms (`Full` or `Centre`: `auto` as decided)
+    pub yarn_rule: crate::assembly::YarnRule,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -665,6 +667,7 @@ pub fn fit(
     f.time_stage("report", t0);
     f.stats.seconds = f.start.elapsed().as_secs_f64();
     let material = f.material();
+    let yarn_rule = f.yarns();
     Ok(FitResult {
         material,
         method: format!("{:?}", opts.method).to_lowercase(),
@@ -678,5 +681,6 @@ pub fn fit(
         max_error: opts.max_error,
         mesh_check,
         shapes_fitted,
+        yarn_rule,
     })
 }

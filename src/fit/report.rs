@@ -31,6 +31,11 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     let _ = writeln!(s, "newton_iterations = {}", r.stats.newton_iterations);
     let _ = writeln!(
         s,
+        "yarn_rule = {}    # how the strips integrated the yarn terms (--yarn-rule; auto as decided)",
+        toml_str(r.yarn_rule.name())
+    );
+    let _ = writeln!(
+        s,
         "degrees = {{ warp = {}, weft = {}, shear = {} }}",
         r.material.law.warp.degree(),
         r.material.law.weft.degree(),

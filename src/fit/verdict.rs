@@ -208,6 +208,7 @@ mod tests {
             max_error: 0.1,
             mesh_check: None,
             shapes_fitted: false,
+            yarn_rule: crate::assembly::YarnRule::Full,
         }
     }
 
