@@ -92,6 +92,7 @@ impl ShellModel {
             }
             add_point(da, (idx, w), &dey, &dgy, &want, &mut energy, &mut gradient);
         }
+        let moved = self.centres.as_ref().map_or(1.0, |c| c.moved);
         for face in 0..self.basis.num_faces {
             let Some((idx, w, y, rest)) = self.centre_kinematics(face, x) else {
                 break;
@@ -99,7 +100,6 @@ impl ShellModel {
             let (m, _) = rest.strains(&y);
             let mut dey = vec![0.0; np];
             let mut dgy = vec![YVec::zeros(); np];
-            let moved = self.centres.as_ref().map_or(1.0, |c| c.moved);
             self.yarn_terms(&m, moved, nlaw, &want, &mut dey, &mut dgy)?;
             add_point(
                 rest.d_area,

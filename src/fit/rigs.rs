@@ -42,12 +42,6 @@ impl Fitter<'_> {
         self.yarns.unwrap_or(YarnRule::Full)
     }
 
-    /// The yarn rule of the fit's cantilevers: `--yarn-rule` as a bend takes it (`auto` is
-    /// the full rule there, [`YarnRule::for_bending`]).
-    pub(super) fn bend_yarns(&self) -> YarnRule {
-        self.opts.yarn_rule.for_bending()
-    }
-
     /// Decides `--yarn-rule auto` by the bootstrapped law's yarn-to-shear ratio, so that
     /// every strip of the fit shares one discretisation, and says so.
     pub(super) fn decide_yarns(&mut self) {

@@ -40,7 +40,7 @@ impl Fitter<'_> {
             .iter()
             .map(|b| {
                 let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-                bend.yarn_rule = self.bend_yarns();
+                bend.yarn_rule = self.opts.yarn_rule; // a bend reads `auto` as the full rule
                 bend.mesh = bend_mesh(self.bend_level(level), b);
                 bend.solver.rtol = super::FIT_RTOL;
                 bend.solver.strategy = self.opts.strategy;

@@ -275,7 +275,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         f.bend_angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.yarn_rule = f.bend_yarns();
+            bend.yarn_rule = f.opts.yarn_rule; // a bend reads `auto` as the full rule
             bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
             let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
                 stage: format!("predicting the {}° cantilever", b.angle_deg),
