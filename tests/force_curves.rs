@@ -69,6 +69,7 @@ fn nonlinear_degree2() -> FabricMaterial {
                 e22: (0.0, 0.09),
                 e12: (-0.1, 0.1),
             },
+            coupling: None,
         },
         bending: None,
     }

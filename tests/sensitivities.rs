@@ -27,6 +27,7 @@ fn material() -> FabricMaterial {
                 alpha: vec![1.0, 40.0],
             },
             cutoffs: Cutoffs::none(),
+            coupling: None,
         },
         bending: None,
     }

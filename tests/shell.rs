@@ -292,6 +292,7 @@ fn parameter_and_thickness_sensitivities_match_differences() {
             e22: (0.0, 0.03),
             e12: (-0.02, 0.02),
         },
+        coupling: None,
     };
     let mut mesh = rectangular_grid(0.04, 0.06, 3, 4);
     for p in &mut mesh.positions {

@@ -282,6 +282,7 @@ mod tests {
                 alpha: vec![2.0, -2.0],
             },
             cutoffs: Cutoffs::none(),
+            coupling: None,
         }
     }
 

@@ -357,6 +357,7 @@ pub fn stiffening() -> FabricMaterial {
             weft: stiff.clone(),
             shear: stiff,
             cutoffs: Cutoffs::none(),
+            coupling: None,
         },
         bending: None,
     }

@@ -142,6 +142,7 @@ mod tests {
                 alpha: vec![1.0, 40.0],
             },
             cutoffs: Cutoffs::none(),
+            coupling: None,
         }
     }
 

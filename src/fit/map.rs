@@ -258,6 +258,7 @@ mod tests {
                 alpha: vec![2.0, 90.0],
             },
             cutoffs: Cutoffs::none(),
+            coupling: None,
         }
     }
 

@@ -565,6 +565,7 @@ pub fn fit(
             weft: Eta::linear(),
             shear: Eta::linear(),
             cutoffs: Cutoffs::none(),
+            coupling: None,
         },
         thickness: known.thickness.unwrap_or(data.thickness),
         a12,

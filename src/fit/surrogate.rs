@@ -272,6 +272,7 @@ mod tests {
             weft: Eta::linear(),
             shear: Eta::linear(),
             cutoffs: Cutoffs::none(),
+            coupling: None,
         }
     }
 

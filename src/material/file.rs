@@ -28,6 +28,16 @@
 //! e12_max = 0.20    # e12_min = -e12_max
 //! ```
 //!
+//! An optional `[shear_coupling]` table couples the shear stiffness to the yarn strains
+//! (see the law's module doc; not in the paper): the shear term is multiplied by
+//! exp(warp·Ẽ₁₁ + weft·Ẽ₂₂), |κ| ≤ 200.
+//!
+//! ```toml
+//! [shear_coupling]  # dimensionless, per unit Green strain; negative: shear softens under tension
+//! warp = -8.0
+//! weft = -12.0
+//! ```
+//!
 //! An optional `[bending]` table gives the bending its own rigidities (see [`super::bending`])
 //! instead of the paper's τ³/12 link to the membrane law:
 //!
@@ -60,6 +70,7 @@ struct RawMaterial {
     weft: Option<RawEta>,
     shear: Option<RawEta>,
     cutoffs: Option<RawCutoffs>,
+    shear_coupling: Option<RawCoupling>,
     bending: Option<RawBending>,
     /// written by `ks-fit fit` (how the material was obtained); read past, not used
     #[allow(dead_code)]
@@ -75,6 +86,16 @@ struct RawEta {
     mu: Vec<f64>,
     alpha: Vec<f64>,
 }
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCoupling {
+    warp: f64,
+    weft: f64,
+}
+
+/// The largest |κ| of a `[shear_coupling]` (exp(200 · 0.1) is already 5e8).
+pub const COUPLING_MAX: f64 = 200.0;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -357,6 +378,21 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
     law.weft = eta("weft", raw.weft)?;
     law.shear = eta("shear", raw.shear)?;
     law.cutoffs = cutoffs;
+    if let Some(c) = raw.shear_coupling {
+        for (key, v) in [("warp", c.warp), ("weft", c.weft)] {
+            if !(v.is_finite() && v.abs() <= COUPLING_MAX) {
+                return Err(err(
+                    Some("shear_coupling"),
+                    key,
+                    format!("[shear_coupling] {key} must be a finite number in [-{COUPLING_MAX}, {COUPLING_MAX}], got {v:?}"),
+                ));
+            }
+        }
+        law.coupling = Some(super::ShearCoupling {
+            warp: c.warp,
+            weft: c.weft,
+        });
+    }
     // the stress must rise with strain wherever the law is its own (inside the cut-offs; Green
     // strain up to 1 where there is none): a falling branch has no stable equilibrium
     for (table, key, eta, (lo, hi)) in [
@@ -443,6 +479,14 @@ pub fn material_toml(m: &FabricMaterial) -> String {
         let _ = writeln!(s, "mu = {:?}", eta.mu);
         let _ = writeln!(s, "alpha = {:?}", eta.alpha);
     }
+    if let Some(c) = &law.coupling {
+        let _ = writeln!(
+            s,
+            "\n[shear_coupling]    # shear stiffness times exp(warp·E11 + weft·E22)"
+        );
+        let _ = writeln!(s, "warp = {:?}", c.warp);
+        let _ = writeln!(s, "weft = {:?}", c.weft);
+    }
     if let Some(b) = &m.bending {
         let _ = writeln!(
             s,
@@ -520,6 +564,10 @@ mod tests {
         m.law.cutoffs.e11 = (f64::NEG_INFINITY, 0.0625);
         m.law.cutoffs.e12 = (-0.1, 0.1);
         m.bending = Some(BendingRigidity::from_bias(2e-5, 6e-6, 3e-6).unwrap());
+        m.law.coupling = Some(crate::material::ShearCoupling {
+            warp: -8.25,
+            weft: 1.0 / 3.0,
+        });
         let text = material_toml(&m);
         let back = parse_material(&text, "w.toml").unwrap();
         assert_eq!(back, m, "{text}");
@@ -527,6 +575,26 @@ mod tests {
         let with_fit =
             format!("{text}\n[fit]\nwall_seconds = 3.5\n[[fit.test]]\nkind = \"bend\"\n");
         assert_eq!(parse_material(&with_fit, "w.toml").unwrap(), m);
+    }
+
+    #[test]
+    fn a_shear_coupling_is_read_and_checked() {
+        let m = parse_material(
+            &format!("{GOOD}[shear_coupling]\nwarp = -8.0\nweft = 3.5\n"),
+            "m",
+        )
+        .unwrap();
+        let c = m.law.coupling.unwrap();
+        assert_eq!((c.warp, c.weft), (-8.0, 3.5));
+        assert_eq!(parse_material(GOOD, "m").unwrap().law.coupling, None);
+        for (table, key) in [
+            ("warp = -8.0\nweft = 300.0\n", "weft"),
+            ("warp = nan\nweft = 0.0\n", "warp"),
+        ] {
+            let e = parse_material(&format!("{GOOD}[shear_coupling]\n{table}"), "m").unwrap_err();
+            assert!(e.message.contains(key) && e.line.is_some(), "{e}");
+        }
+        assert!(parse_material(&format!("{GOOD}[shear_coupling]\nwarp = 1.0\n"), "m").is_err());
     }
 
     #[test]

@@ -16,7 +16,7 @@ pub use bending::BendingRigidity;
 pub use file::{
     load_material, material_toml, parse_material, FabricMaterial, MaterialFileError, MODULUS_RANGE,
 };
-pub use orthotropic::{Cutoffs, Eta, Orthotropic, ParamResponse};
+pub use orthotropic::{Cutoffs, Eta, Orthotropic, ParamResponse, ShearCoupling};
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -45,11 +45,13 @@ pub trait Law: Send + Sync {
     /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
     fn param_response(&self, e: &Vector3<f64>) -> Result<ParamResponse, OutOfDomain>;
 
-    /// The yarn part ψ_y(Ẽ₁₁, Ẽ₂₂) of a law that separates as ψ = ψ_y(Ẽ₁₁, Ẽ₂₂) + ψ_s(Ẽ₁₂)
-    /// with ψ_s(0) = ψ_s'(0) = 0 (both laws here: the warp, weft and a₁₂ terms against the
-    /// shear term): ψ at (Ẽ₁₁, Ẽ₂₂, 0) with the shear stress and the shear row and column of
-    /// the tangent removed. What the selective reduced integration of
-    /// [`crate::assembly::YarnRule::Centre`] evaluates once per face.
+    /// The yarn part ψ_y(Ẽ₁₁, Ẽ₂₂) = ψ(Ẽ₁₁, Ẽ₂₂, 0) of a law whose rest ψ − ψ_y vanishes with
+    /// its gradient at Ẽ₁₂ = 0 (both laws here: the warp, weft and a₁₂ terms against the shear
+    /// term, which the optional tension–shear coupling lets depend on the yarn strains too):
+    /// ψ at (Ẽ₁₁, Ẽ₂₂, 0) with the shear stress and the shear row and column of the tangent
+    /// removed. What the selective reduced integration of
+    /// [`crate::assembly::YarnRule::Centre`] evaluates once per face (the rest stays on the
+    /// Gauss points).
     fn yarn_response(&self, e: &Vector3<f64>) -> Result<Response, OutOfDomain> {
         let mut r = self.response(&Vector3::new(e[0], e[1], 0.0))?;
         r.stress[2] = 0.0;

@@ -12,8 +12,29 @@
 //! and keeps ψ twice continuously differentiable.
 //!
 //! Parameters, in [`Orthotropic::names`] order: a11, a22, a12, g12, then μ and α of warp
-//! (η₁), weft (η₃) and shear (η₄). The μ are reported as independent; a fitter that keeps
-//! Σμ = 1 applies its own chain rule.
+//! (η₁), weft (η₃) and shear (η₄), then the coupling's κ₁, κ₂ when there is one. The μ are
+//! reported as independent; a fitter that keeps Σμ = 1 applies its own chain rule.
+//!
+//! **Tension–shear coupling** (optional, [`ShearCoupling`]; not in the paper). The separable
+//! law gives every off-axis strip the same shear response at equal Ẽ₁₂, whatever the yarn
+//! strains beside it; woven fabrics shear more stiffly or more softly under yarn tension
+//! (friction and yarn flattening at the crossings). The coupled law multiplies the shear term:
+//!
+//! ψ = a₁₁/2 η₁ + a₁₂ Ẽ₁₁Ẽ₂₂ + a₂₂/2 η₃ + G₁₂ η₄(Ẽ₁₂²) · g₁(Ẽ₁₁) g₂(Ẽ₂₂), g_i(e) = exp(κ_i e),
+//!
+//! so the shear stiffness at yarn strains (Ẽ₁₁, Ẽ₂₂) is G₁₂ exp(κ₁Ẽ₁₁ + κ₂Ẽ₂₂) (κ < 0: shear
+//! softens as the yarns stretch). At Ẽ₁₂ = 0 the factor multiplies zero with zero slope, so the
+//! warp and weft strips and every small-strain modulus are those of the separable law: only
+//! off-axis strips at finite strain see κ. The yarn part ψ(Ẽ₁₁, Ẽ₂₂, 0) is unchanged, which is
+//! what the centre rule of the yarn terms needs. **Cut-offs:** each g_i is continued past the
+//! Ẽ_ii cut-offs by its quadratic Taylor polynomial, exp(κe_c)(1 + κδ + κ²δ²/2) > 0, and η₄'s
+//! term as before; a product of C² factors is C², and g stays positive. **Convexity:** with
+//! h = G₁₂η₄(Ẽ₁₂²) the coupled term's Hessian in (Ẽ₁₂, Ẽ₁₁) has determinant
+//! g²κ₁²(h h'' − h'²) < 0 (for η₄ linear, −2κ₁²G₁₂²Ẽ₁₂²g²): the term alone is not convex, and
+//! the law is convex while the yarn stiffness outweighs it, a₁₁ ≳ G₁₂ κ₁² Ẽ₁₂² g (for the
+//! linear terms exactly: a₁₁ + h κ₁² g > h'² κ₁² g / h''); likewise a₂₂ with κ₂. Fabrics have
+//! a₁₁/G₁₂ of 10–10⁴ and Ẽ₁₂ ≲ 0.2, so |κ| up to about 10–100 keeps that margin; a fitter
+//! checks the tangent over the exercised strains ([`Orthotropic::tangent_positive`]).
 
 use super::{Law, OutOfDomain, Response};
 use nalgebra::{Matrix3, Vector3};
@@ -127,7 +148,17 @@ impl Cutoffs {
     }
 }
 
-/// The Clyde et al. law with its cut-offs.
+/// The tension–shear coupling of the module doc: the shear term times
+/// exp(κ₁Ẽ₁₁ + κ₂Ẽ₂₂) (κ dimensionless, per unit Green strain).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShearCoupling {
+    /// κ₁ (warp strain)
+    pub warp: f64,
+    /// κ₂ (weft strain)
+    pub weft: f64,
+}
+
+/// The Clyde et al. law with its cut-offs (and the optional coupling).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Orthotropic {
     pub a11: f64,
@@ -138,6 +169,22 @@ pub struct Orthotropic {
     pub weft: Eta,
     pub shear: Eta,
     pub cutoffs: Cutoffs,
+    /// `None`: the paper's separable law
+    pub coupling: Option<ShearCoupling>,
+}
+
+/// g(e) = exp(κ e) inside `range`, its quadratic Taylor polynomial outside: (g, g', g'') and
+/// their derivatives in κ, (∂g, ∂g').
+fn factor(kappa: f64, range: (f64, f64), e: f64) -> ([f64; 3], [f64; 2]) {
+    let ec = e.clamp(range.0, range.1);
+    let d = e - ec;
+    let x = (kappa * ec).exp();
+    let g = x * (1.0 + kappa * d + 0.5 * kappa * kappa * d * d);
+    let g1 = x * kappa * (1.0 + kappa * d);
+    let g2 = x * kappa * kappa;
+    let dg = ec * g + x * (d + kappa * d * d);
+    let dg1 = ec * g1 + x * (1.0 + 2.0 * kappa * d);
+    ([g, g1, g2], [dg, dg1])
 }
 
 /// One one-dimensional term f(e) = c/2 η(e²) with its derivatives in e (and in parameters).
@@ -231,6 +278,10 @@ impl Orthotropic {
                 n.push(format!("{name}.alpha[{i}]"));
             }
         }
+        if self.coupling.is_some() {
+            n.push("coupling.warp".into());
+            n.push("coupling.weft".into());
+        }
         n
     }
 
@@ -240,6 +291,9 @@ impl Orthotropic {
         for eta in [&self.warp, &self.weft, &self.shear] {
             k.extend(&eta.mu);
             k.extend(&eta.alpha);
+        }
+        if let Some(c) = self.coupling {
+            k.extend([c.warp, c.weft]);
         }
         k
     }
@@ -257,6 +311,32 @@ impl Orthotropic {
             eta.alpha.copy_from_slice(&k[at + d..at + 2 * d]);
             at += 2 * d;
         }
+        if let Some(c) = &mut self.coupling {
+            c.warp = k[at];
+            c.weft = k[at + 1];
+        }
+    }
+
+    /// The coupling's factors g₁(Ẽ₁₁), g₂(Ẽ₂₂) with their κ-derivatives (`None` without one).
+    fn factors(&self, e: &Vector3<f64>) -> Option<[([f64; 3], [f64; 2]); 2]> {
+        self.coupling.map(|c| {
+            [
+                factor(c.warp, self.cutoffs.e11, e[0]),
+                factor(c.weft, self.cutoffs.e22, e[1]),
+            ]
+        })
+    }
+
+    /// Whether the tangent is positive definite at every corner and midpoint of the strain
+    /// box `lo`–`hi` (each component at its low, middle and high value, 27 points): the
+    /// convexity a coupled law must keep over the strains a fit exercised.
+    pub fn tangent_positive(&self, lo: [f64; 3], hi: [f64; 3]) -> bool {
+        let at = |i: usize, k: usize| lo[i] + 0.5 * k as f64 * (hi[i] - lo[i]);
+        (0..27).all(|n| {
+            let e = Vector3::new(at(0, n % 3), at(1, (n / 3) % 3), at(2, n / 9));
+            self.response(&e)
+                .is_ok_and(|r| r.tangent.cholesky().is_some())
+        })
     }
 
     /// ∂ψ/∂k and ∂²ψ/∂Ẽ∂k for every parameter.
@@ -275,17 +355,41 @@ impl Orthotropic {
         let stiff_index = [0usize, 1, 3];
         let stiff_factor = [1.0, 1.0, 2.0];
         let mut at = 4;
+        let factors = self.factors(e);
+        // (∂f, ∂f') of a term's parameter → (∂ψ, ∂S): the shear term's times the coupling
+        let spread = |comp: usize, [df, df1]: [f64; 2]| -> (f64, Vector3<f64>) {
+            match (comp, &factors) {
+                (2, Some([(g1, _), (g2, _)])) => (
+                    df * g1[0] * g2[0],
+                    Vector3::new(df * g1[1] * g2[0], df * g1[0] * g2[1], df1 * g1[0] * g2[0]),
+                ),
+                _ => {
+                    let mut v = Vector3::zeros();
+                    v[comp] = df1;
+                    (df, v)
+                }
+            }
+        };
         // parameter blocks are ordered warp, weft, shear = components 0, 1, 2
         for (comp, term) in terms.iter().enumerate() {
             let rows = term.param_eval(e[comp]).ok_or_else(bad)?;
             let s = stiff_index[comp];
-            dpsi[s] += stiff_factor[comp] * rows[0][0];
-            dstress[s][comp] += stiff_factor[comp] * rows[0][1];
+            let (p, v) = spread(comp, rows[0]);
+            dpsi[s] += stiff_factor[comp] * p;
+            dstress[s] += stiff_factor[comp] * v;
             for (j, r) in rows[1..].iter().enumerate() {
-                dpsi[at + j] = r[0];
-                dstress[at + j][comp] = r[1];
+                (dpsi[at + j], dstress[at + j]) = spread(comp, *r);
             }
             at += rows.len() - 1;
+        }
+        if let Some([(g1, dg1), (g2, dg2)]) = factors {
+            let [f, f1, _] = terms[2].eval(e[2]).ok_or_else(bad)?;
+            // κ₁: ∂/∂κ₁ of f g₁ g₂, and of its strain gradient
+            dpsi[at] = f * dg1[0] * g2[0];
+            dstress[at] = Vector3::new(f * dg1[1] * g2[0], f * dg1[0] * g2[1], f1 * dg1[0] * g2[0]);
+            dpsi[at + 1] = f * g1[0] * dg2[0];
+            dstress[at + 1] =
+                Vector3::new(f * g1[1] * dg2[0], f * g1[0] * dg2[1], f1 * g1[0] * dg2[0]);
         }
         Ok(ParamResponse { dpsi, dstress })
     }
@@ -302,6 +406,7 @@ impl From<super::OrthotropicStvk> for Orthotropic {
             weft: Eta::linear(),
             shear: Eta::linear(),
             cutoffs: Cutoffs::none(),
+            coupling: None,
         }
     }
 }
@@ -329,11 +434,40 @@ impl Law for Orthotropic {
         let mut tangent = Matrix3::zeros();
         tangent[(0, 1)] = self.a12;
         tangent[(1, 0)] = self.a12;
-        for (k, term) in self.terms().iter().enumerate() {
+        let terms = self.terms();
+        for (k, term) in terms[..2].iter().enumerate() {
             let [f, f1, f2] = term.eval(e[k]).ok_or_else(bad)?;
             psi += f;
             stress[k] += f1;
             tangent[(k, k)] += f2;
+        }
+        let [f, f1, f2] = terms[2].eval(e[2]).ok_or_else(bad)?;
+        match self.factors(e) {
+            None => {
+                psi += f;
+                stress[2] += f1;
+                tangent[(2, 2)] += f2;
+            }
+            Some([(g1, _), (g2, _)]) => {
+                // f(Ẽ₁₂) g₁(Ẽ₁₁) g₂(Ẽ₂₂)
+                psi += f * g1[0] * g2[0];
+                stress += Vector3::new(f * g1[1] * g2[0], f * g1[0] * g2[1], f1 * g1[0] * g2[0]);
+                let c = Matrix3::new(
+                    f * g1[2] * g2[0],
+                    f * g1[1] * g2[1],
+                    f1 * g1[1] * g2[0],
+                    f * g1[1] * g2[1],
+                    f * g1[0] * g2[2],
+                    f1 * g1[0] * g2[1],
+                    f1 * g1[1] * g2[0],
+                    f1 * g1[0] * g2[1],
+                    f2 * g1[0] * g2[0],
+                );
+                tangent += c;
+            }
+        }
+        if !psi.is_finite() {
+            return Err(bad());
         }
         Ok(Response {
             psi,
@@ -371,6 +505,18 @@ mod tests {
                 e22: (0.0, 0.15),
                 e12: (-0.2, 0.2),
             },
+            coupling: None,
+        }
+    }
+
+    /// The sample law with a tension–shear coupling of either sign.
+    fn coupled() -> Orthotropic {
+        Orthotropic {
+            coupling: Some(ShearCoupling {
+                warp: -9.0,
+                weft: 6.0,
+            }),
+            ..sample()
         }
     }
 
@@ -409,7 +555,12 @@ mod tests {
 
     #[test]
     fn strain_derivatives_match_differences_inside_and_outside_the_box() {
-        let law = sample();
+        for law in [sample(), coupled()] {
+            strain_derivatives_match(&law);
+        }
+    }
+
+    fn strain_derivatives_match(law: &Orthotropic) {
         let h = 1e-7;
         for e in strains() {
             let r = law.response(&e).unwrap();
@@ -437,7 +588,12 @@ mod tests {
 
     #[test]
     fn parameter_derivatives_match_differences() {
-        let law = sample();
+        for law in [sample(), coupled()] {
+            parameter_derivatives_match(&law);
+        }
+    }
+
+    fn parameter_derivatives_match(law: &Orthotropic) {
         let k0 = law.params();
         let names = law.names();
         assert_eq!(names.len(), k0.len());
@@ -481,7 +637,12 @@ mod tests {
 
     #[test]
     fn value_gradient_and_hessian_are_continuous_across_each_cutoff() {
-        let law = sample();
+        for law in [sample(), coupled()] {
+            continuous_across_cutoffs(&law);
+        }
+    }
+
+    fn continuous_across_cutoffs(law: &Orthotropic) {
         let faces = [
             (0, 0.12),
             (0, 0.0),
@@ -542,9 +703,74 @@ mod tests {
         }
     }
 
+    /// The coupling leaves the yarns alone (the warp and weft strips, and the centre rule's
+    /// yarn part), scales the shear stiffness by exp(κ₁Ẽ₁₁ + κ₂Ẽ₂₂) inside the box, and
+    /// names its two parameters last.
+    #[test]
+    fn the_coupling_scales_the_shear_stiffness_and_nothing_else() {
+        let (plain, law) = (sample(), coupled());
+        for e in strains() {
+            let (a, b) = (
+                plain.yarn_response(&e).unwrap(),
+                law.yarn_response(&e).unwrap(),
+            );
+            assert_eq!(a, b, "{e:?}");
+            // on the yarn axes only the shear stiffness differs
+            let y = Vector3::new(e[0], e[1], 0.0);
+            let (a, b) = (plain.response(&y).unwrap(), law.response(&y).unwrap());
+            assert_eq!((a.psi, a.stress), (b.psi, b.stress));
+            let (mut ta, mut tb) = (a.tangent, b.tangent);
+            ta[(2, 2)] = 0.0;
+            tb[(2, 2)] = 0.0;
+            assert_eq!(ta, tb);
+        }
+        let e = Vector3::new(0.05, 0.08, 1e-4);
+        let (a, b) = (plain.response(&e).unwrap(), law.response(&e).unwrap());
+        let want = (-9.0 * 0.05 + 6.0 * 0.08f64).exp();
+        let ratio = b.tangent[(2, 2)] / a.tangent[(2, 2)];
+        assert!((ratio - want).abs() < 1e-12 * want, "{ratio} vs {want}");
+        let names = law.names();
+        assert_eq!(
+            &names[names.len() - 2..],
+            ["coupling.warp", "coupling.weft"]
+        );
+        let mut back = sample();
+        back.coupling = Some(ShearCoupling {
+            warp: 0.0,
+            weft: 0.0,
+        });
+        back.set_params(&law.params());
+        assert_eq!(back, law);
+        // a zero coupling is the separable law
+        back.set_params(&[&plain.params()[..], &[0.0, 0.0]].concat());
+        for e in strains() {
+            assert_eq!(back.response(&e).unwrap(), plain.response(&e).unwrap());
+        }
+    }
+
+    /// Convex while the yarns outweigh the coupled shear term (module doc): the sample's
+    /// κ = −9, 6 keep the tangent positive over the box; κ = 300 does not.
+    #[test]
+    fn the_convexity_check_sees_a_coupling_too_strong_for_the_yarns() {
+        let (lo, hi) = ([0.0, 0.0, -0.1], [0.1, 0.1, 0.1]);
+        assert!(sample().tangent_positive(lo, hi));
+        assert!(coupled().tangent_positive(lo, hi));
+        let mut strong = coupled();
+        strong.coupling = Some(ShearCoupling {
+            warp: 300.0,
+            weft: 0.0,
+        });
+        assert!(!strong.tangent_positive(lo, hi));
+    }
+
     #[test]
     fn shear_sign_does_not_matter() {
-        let law = sample();
+        for law in [sample(), coupled()] {
+            shear_sign_does_not_matter_for(&law);
+        }
+    }
+
+    fn shear_sign_does_not_matter_for(law: &Orthotropic) {
         for e in strains() {
             let f = Vector3::new(e[0], e[1], -e[2]);
             let (a, b) = (law.response(&e).unwrap(), law.response(&f).unwrap());

@@ -171,6 +171,7 @@ mod tests {
             weft: Eta::linear(),
             shear: Eta::linear(),
             cutoffs: Cutoffs::none(),
+            coupling: None,
         };
         let m = FabricMaterial::paper("t", 0.1, 2e-4, law);
         let mut t = TensileStrip::new(0.05, 0.075, 30.0);
