@@ -355,6 +355,7 @@ mod tests {
             mesh_check: None,
             shapes_fitted: false,
             yarn_rule: crate::assembly::YarnRule::Full,
+            shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
         };
         let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
         let fig = Figure {

@@ -15,7 +15,7 @@ const STAGE_UNCHANGED: f64 = 1e-3;
 /// The shell model, coarse to fine; returns the meshes fitted on.
 pub(super) fn ladder(
     f: &mut Fitter,
-    maps: &[StageMap],
+    maps: &mut [StageMap],
     strips: &[Vec<usize>],
     shear_candidates: &[Vec<f64>],
 ) -> Result<Vec<(usize, usize)>, FitError> {
@@ -108,7 +108,7 @@ pub(super) fn ladder(
                     continue;
                 }
             }
-            let (_, range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+            let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
                 // the homogeneous strip models a clamped bias strip poorly: choose the shear
                 // degree on the shell model itself
                 f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
@@ -116,6 +116,12 @@ pub(super) fn ladder(
                 f.shell_stage(maps[k], &strips[k], level, li == 0, false)?
                     .expect("a stage that raises no degree always runs")
             };
+            if k == 2 && li == 0 {
+                // then, with the degree chosen, whether the tension–shear coupling pays
+                let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
+                maps[2] = map;
+                range = r;
+            }
             // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
             if let Some((lo, hi)) = range {
                 let law = &mut f.law;

@@ -17,11 +17,20 @@
 //! [`StageMap::chain`].
 //!
 //! a12 follows its rule ([`A12Rule`]) whenever a11 or a22 changes.
+//!
+//! **Coupling.** A shear stage with `coupling` also fits the tension–shear coupling κ₁, κ₂
+//! ([`crate::material::ShearCoupling`]), two variables after η's: v with
+//! κ = K tanh(v/K)/ê, ê = 2√x̂ the largest axial Green strain of the stage's strips, so that
+//! |κ ê| ≤ K = [`COUPLING_SPAN`]: across the exercised range the coupling changes the shear
+//! stiffness by e^K ≈ 7× at most.
 
-use crate::material::{Eta, Orthotropic};
+use crate::material::{Eta, Orthotropic, ShearCoupling};
 
 /// Bound B of every term's β = α x̂ (see the module doc).
 pub const BETA_MAX: f64 = 6.0;
+
+/// Bound K of the coupling's κ ê (see the module doc).
+pub const COUPLING_SPAN: f64 = 2.0;
 
 /// The variable u of a term bending at β (β clamped just inside ±B).
 pub fn beta_to_var(beta: f64) -> f64 {
@@ -98,11 +107,40 @@ pub struct StageMap {
     /// the stiffness is known (`[known]`): p holds only η's variables
     pub c_known: bool,
     pub a12: A12Rule,
+    /// a shear stage that fits the tension–shear coupling too (two variables after η's)
+    pub coupling: bool,
 }
 
 impl StageMap {
-    fn offset(&self) -> usize {
+    pub(super) fn offset(&self) -> usize {
         usize::from(!self.c_known)
+    }
+
+    /// The coupling's variables after η's (0 or 2).
+    fn tail(&self) -> usize {
+        2 * usize::from(self.coupling)
+    }
+
+    /// ê: the largest axial Green strain of the stage's strips (x̂ = (ê/2)² for the shear).
+    fn ehat(&self) -> f64 {
+        2.0 * self.xhat.sqrt()
+    }
+
+    /// κ of a coupling variable v.
+    pub fn kappa(&self, v: f64) -> f64 {
+        COUPLING_SPAN * (v / COUPLING_SPAN).tanh() / self.ehat()
+    }
+
+    /// dκ/dv.
+    pub fn dkappa(&self, v: f64) -> f64 {
+        let t = (v / COUPLING_SPAN).tanh();
+        (1.0 - t * t) / self.ehat()
+    }
+
+    /// v of a coupling κ (κ ê clamped just inside ±K).
+    fn kappa_var(&self, kappa: f64) -> f64 {
+        let t = (kappa * self.ehat() / COUPLING_SPAN).clamp(-1.0 + 1e-9, 1.0 - 1e-9);
+        COUPLING_SPAN * t.atanh()
     }
 
     pub fn eta<'a>(&self, law: &'a Orthotropic) -> &'a Eta {
@@ -137,6 +175,13 @@ impl StageMap {
         }
         p.extend(&eta.mu[1..]);
         p.extend(eta.alpha.iter().map(|a| beta_to_var(a * self.xhat)));
+        if self.coupling {
+            let c = law.coupling.unwrap_or(ShearCoupling {
+                warp: 0.0,
+                weft: 0.0,
+            });
+            p.extend([self.kappa_var(c.warp), self.kappa_var(c.weft)]);
+        }
         p
     }
 
@@ -146,7 +191,12 @@ impl StageMap {
     }
 
     pub fn degree(&self, p: &[f64]) -> usize {
-        (p.len() - self.offset()).div_ceil(2)
+        (p.len() - self.offset() - self.tail()).div_ceil(2)
+    }
+
+    /// Index in p of the first exponent variable u (η's α come after the μ).
+    pub(super) fn first_alpha(&self, p: &[f64]) -> usize {
+        self.offset() + self.degree(p) - 1
     }
 
     /// The variables of degree d + 1 that start exactly at degree d's law `p`: a new term
@@ -156,8 +206,9 @@ impl StageMap {
         let d = self.degree(p);
         let mut q = p[..o + d - 1].to_vec();
         q.push(0.0);
-        q.extend(&p[o + d - 1..]);
+        q.extend(&p[o + d - 1..o + 2 * d - 1]);
         q.push(beta_to_var(beta));
+        q.extend(&p[o + 2 * d - 1..]);
         q
     }
 
@@ -167,7 +218,7 @@ impl StageMap {
         let mus = &p[o..o + d - 1];
         let mut mu = vec![1.0 - mus.iter().sum::<f64>()];
         mu.extend(mus);
-        let alpha: Vec<f64> = p[o + d - 1..]
+        let alpha: Vec<f64> = p[o + d - 1..o + 2 * d - 1]
             .iter()
             .map(|&u| var_to_beta(u) / self.xhat)
             .collect();
@@ -191,6 +242,13 @@ impl StageMap {
                 law.shear = eta;
             }
         }
+        if self.coupling {
+            let v = &p[o + 2 * d - 1..];
+            law.coupling = Some(ShearCoupling {
+                warp: self.kappa(v[0]),
+                weft: self.kappa(v[1]),
+            });
+        }
         self.a12.apply(law);
     }
 
@@ -207,13 +265,17 @@ impl StageMap {
 
     /// The law parameters (then thickness) a stage's forces depend on through p.
     pub fn wanted(&self, law: &Orthotropic) -> Vec<bool> {
-        let (d1, d3, d4) = (law.warp.degree(), law.weft.degree(), law.shear.degree());
-        let mut w = vec![false; 4 + 2 * (d1 + d3 + d4) + 1];
+        let n = law.params().len();
+        let mut w = vec![false; n + 1];
         let (ci, offset) = self.indices(law);
         let d = self.eta(law).degree();
         w[ci] = true;
         w[2] = true;
         w[offset..offset + 2 * d].iter_mut().for_each(|v| *v = true);
+        if self.coupling {
+            w[n - 2] = true;
+            w[n - 1] = true;
+        }
         w
     }
 
@@ -232,6 +294,14 @@ impl StageMap {
         }
         for i in 0..d {
             out[o + d - 1 + i] = dk[offset + d + i] * self.dalpha(p[o + d - 1 + i]);
+        }
+        if self.coupling {
+            // κ₁, κ₂ are the law's last parameters
+            let n = law.params().len();
+            for i in 0..2 {
+                let v = p[o + 2 * d - 1 + i];
+                out[o + 2 * d - 1 + i] = dk[n - 2 + i] * self.dkappa(v);
+            }
         }
         out
     }
@@ -271,6 +341,7 @@ mod tests {
                     xhat: 2e-3,
                     c_known,
                     a12: A12Rule::Poisson(0.1),
+                    coupling: false,
                 };
                 let l = law();
                 let p = map.encode(&l);
@@ -300,6 +371,7 @@ mod tests {
             xhat: 4e-3,
             c_known: false,
             a12: A12Rule::HalfMin,
+            coupling: false,
         };
         let mut l = law();
         // any variables decode to |α x̂| ≤ B, however far the optimiser wanders

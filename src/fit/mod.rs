@@ -39,6 +39,7 @@
 
 mod bending;
 pub mod bootstrap;
+pub mod coupling;
 pub mod html;
 mod ladder;
 pub mod map;
@@ -130,6 +131,8 @@ pub struct FitOptions {
     pub test_meshes: TestMeshes,
     /// How every solve integrates the yarn terms (`Auto`: decided once after the bootstrap).
     pub yarn_rule: crate::assembly::YarnRule,
+    /// Whether the shear stage also fits the tension–shear coupling ([`coupling`]).
+    pub shear_coupling: coupling::CouplingMode,
 }
 
 impl Default for FitOptions {
@@ -157,6 +160,7 @@ impl Default for FitOptions {
             grading: crate::scene::STRIP_GRADING,
             test_meshes: TestMeshes::Own,
             yarn_rule: crate::assembly::YarnRule::Auto,
+            shear_coupling: coupling::CouplingMode::Auto,
         }
     }
 }
@@ -242,6 +246,8 @@ pub struct FitResult {
     pub shapes_fitted: bool,
     /// how the strips integrated the yarn terms (`Full` or `Centre`: `auto` as decided)
     pub yarn_rule: crate::assembly::YarnRule,
+    /// what became of the tension–shear coupling (`--shear-coupling`)
+    pub shear_coupling: coupling::CouplingOutcome,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -356,6 +362,11 @@ struct Fitter<'a> {
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
     /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
     yarns: Option<crate::assembly::YarnRule>,
+    /// what the tension–shear coupling's trial decided ([`coupling`])
+    coupling: coupling::CouplingOutcome,
+    /// the rms relative error of the last tensile stage run (of the kept degree after a
+    /// degree ladder)
+    stage_rms: f64,
 }
 
 impl Fitter<'_> {
@@ -584,10 +595,12 @@ pub fn fit(
         rigs: Default::default(),
         predictions: Default::default(),
         yarns: None,
+        coupling: coupling::CouplingOutcome::Off,
+        stage_rms: f64::NAN,
     };
     let dirs = [Direction::Warp, Direction::Weft, Direction::Shear];
     let strips: Vec<Vec<usize>> = dirs.iter().map(|&d| f.stage_strips(d)).collect();
-    let maps: Vec<StageMap> = dirs
+    let mut maps: Vec<StageMap> = dirs
         .iter()
         .zip(&strips)
         .map(|(&dir, s)| StageMap {
@@ -599,6 +612,7 @@ pub fn fit(
                 Direction::Shear => known.g12.is_some(),
             },
             a12,
+            coupling: false,
         })
         .collect();
     let has_fit_tests = f.prep.curves.iter().any(|c| c.role == Role::Fit);
@@ -611,7 +625,7 @@ pub fn fit(
     }
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
     f.decide_yarns();
-    let meshes = ladder::ladder(&mut f, &maps, &strips, &shear_candidates)?;
+    let meshes = ladder::ladder(&mut f, &mut maps, &strips, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
     // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist
     // follows the new shear, so the bending (or thickness) stage runs again
@@ -683,5 +697,6 @@ pub fn fit(
         mesh_check,
         shapes_fitted,
         yarn_rule,
+        shear_coupling: f.coupling,
     })
 }

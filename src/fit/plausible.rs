@@ -125,8 +125,8 @@ pub(super) fn exercised(dir: Direction, range: &StrainRange) -> f64 {
 /// 45° strip stalled at 3.6 %; from the bootstrap's other exponent, 0.11, it fits to 0.03 %.
 pub(super) fn new_term_beta(map: StageMap, prev: &[f64], cand: &[f64]) -> f64 {
     let betas = |p: &[f64]| -> Vec<f64> {
-        let d = map.degree(p);
-        p[p.len() - d..].iter().map(|&u| var_to_beta(u)).collect()
+        let (d, a) = (map.degree(p), map.first_alpha(p));
+        p[a..a + d].iter().map(|&u| var_to_beta(u)).collect()
     };
     let old = betas(prev);
     let gap = |b: f64| {

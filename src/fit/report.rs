@@ -36,6 +36,25 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     );
     let _ = writeln!(
         s,
+        "shear_coupling = {}    # the tension–shear coupling (--shear-coupling): off, not tried, not kept or kept",
+        toml_str(r.shear_coupling.name())
+    );
+    if let crate::fit::coupling::CouplingOutcome::Kept { without, with }
+    | crate::fit::coupling::CouplingOutcome::Rejected { without, with, .. } = &r.shear_coupling
+    {
+        // -1: the coupled stage failed
+        let v = |x: f64| if x.is_finite() { x } else { -1.0 };
+        let _ = writeln!(
+            s,
+            "shear_coupling_errors = {{ shape_without = {:.6}, shape_with = {:.6}, rms_without = {:.6}, rms_with = {:.6} }}    # the shear stage's on the first mesh, without and with it",
+            v(without.shape),
+            v(with.shape),
+            v(without.rms),
+            v(with.rms)
+        );
+    }
+    let _ = writeln!(
+        s,
         "degrees = {{ warp = {}, weft = {}, shear = {} }}",
         r.material.law.warp.degree(),
         r.material.law.weft.degree(),

@@ -128,7 +128,7 @@ impl Fitter<'_> {
         (chosen.0, all)
     }
 
-    fn log_degree(&mut self, line: String) {
+    pub(super) fn log_degree(&mut self, line: String) {
         self.say(&line);
         self.degree_log.push(line);
     }
@@ -389,6 +389,7 @@ impl Fitter<'_> {
             self.keep_rig(key, rig);
         }
         self.time_stage(map.dir.name(), t0);
+        self.stage_rms = err;
         Ok(Some((shape, range)))
     }
 
@@ -404,12 +405,12 @@ impl Fitter<'_> {
         candidates: &[Vec<f64>],
     ) -> Result<(f64, Option<StrainRange>), FitError> {
         let base = self.law.clone();
-        let mut best: Option<(f64, Orthotropic, Option<StrainRange>)> = None;
+        let mut best: Option<(f64, Orthotropic, Option<StrainRange>, f64)> = None;
         for (i, cand) in candidates.iter().enumerate() {
             let degree = i + 1;
             self.law = base.clone();
             match &best {
-                Some((_, law, _)) => {
+                Some((_, law, _, _)) => {
                     let prev = map.encode(law);
                     let beta = super::plausible::new_term_beta(map, &prev, cand);
                     self.law = law.clone();
@@ -478,7 +479,7 @@ impl Fitter<'_> {
                 ));
                 break;
             }
-            best = Some((err, self.law.clone(), range));
+            best = Some((err, self.law.clone(), range, self.stage_rms));
             if self.opts.fixed_degree.is_none() && err <= self.opts.degree_good {
                 self.degree_log.push(format!(
                     "{}: degree {degree} kept: error below {:.2} %",
@@ -488,8 +489,9 @@ impl Fitter<'_> {
                 break;
             }
         }
-        let (err, law, range) = best.expect("one candidate at least");
+        let (err, law, range, rms) = best.expect("one candidate at least");
         self.law = law;
+        self.stage_rms = rms;
         Ok((err, range))
     }
 

@@ -145,13 +145,13 @@ pub(super) fn unweight(r: &[f64], lens: &[usize]) -> Vec<f64> {
 pub(super) fn starts(map: StageMap, p: &[f64]) -> Vec<Vec<f64>> {
     let mut out = vec![p.to_vec()];
     let d = map.degree(p);
-    let o = p.len() - 2 * d + 1;
+    let o = map.offset();
     if d > 1 && p[o + d - 2] == 0.0 {
         for mu in [0.3, -0.3, 0.7] {
             for beta in [0.5, 2.0, 4.0, 5.5] {
                 let mut q = p.to_vec();
                 q[o + d - 2] = mu;
-                q[p.len() - 1] = super::map::beta_to_var(beta);
+                q[o + 2 * d - 2] = super::map::beta_to_var(beta);
                 out.push(q);
             }
         }
@@ -320,6 +320,7 @@ mod tests {
             xhat: 0.05f64.powi(2),
             c_known: false,
             a12: A12Rule::HalfMin,
+            coupling: false,
         };
         let truth = vec![3.0e6f64.ln(), 0.3, beta_var(0.2), beta_var(2.5)];
         let prep = setup(map, &truth, 1.15);
@@ -369,6 +370,7 @@ mod tests {
             xhat: 0.01,
             c_known: false,
             a12: A12Rule::HalfMin,
+            coupling: false,
         };
         assert_eq!(starts(map, &[1.0, 0.2]).len(), 1);
         let raised = map.raise(&[1.0, 0.2], 2.0);

@@ -226,6 +226,17 @@ pub(super) fn physical_rows(
         values.push(eta.alpha[i]);
         rows.push(unit(o + d - 1 + i, map.dalpha(p[o + d - 1 + i])));
     }
+    if let (true, Some(c)) = (map.coupling, law.coupling) {
+        for (i, (name, kappa)) in [("coupling_warp", c.warp), ("coupling_weft", c.weft)]
+            .into_iter()
+            .enumerate()
+        {
+            let k = o + 2 * d - 1 + i;
+            names.push(name.to_string());
+            values.push(kappa);
+            rows.push(unit(k, map.dkappa(p[k])));
+        }
+    }
     let dg = DMatrix::from_fn(rows.len(), n, |a, b| rows[a][b]);
     (names, values, dg)
 }

@@ -209,6 +209,7 @@ mod tests {
             mesh_check: None,
             shapes_fitted: false,
             yarn_rule: crate::assembly::YarnRule::Full,
+            shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
         }
     }
 
