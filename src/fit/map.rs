@@ -364,6 +364,78 @@ mod tests {
         }
     }
 
+    /// The coupled shear map: κ round-trips through encode and decode, survives a raised
+    /// degree, stays inside its span, and `chain` is the derivative of the decoded law.
+    #[test]
+    fn the_coupled_shear_map_round_trips_and_differentiates() {
+        let map = StageMap {
+            dir: Direction::Shear,
+            xhat: 4e-4,
+            c_known: false,
+            a12: A12Rule::HalfMin,
+            coupling: true,
+        };
+        let mut l = law();
+        l.coupling = Some(ShearCoupling {
+            warp: -12.0,
+            weft: 7.5,
+        });
+        let p = map.encode(&l);
+        assert_eq!(p.len(), 1 + 3 + 2);
+        assert_eq!(map.degree(&p), 2);
+        let mut back = l.clone();
+        back.coupling = None;
+        map.decode(&p, &mut back);
+        let c = back.coupling.unwrap();
+        assert!(
+            (c.warp + 12.0).abs() < 1e-9 && (c.weft - 7.5).abs() < 1e-9,
+            "{c:?}"
+        );
+        let q = map.raise(&p, 2.0);
+        let mut raised = l.clone();
+        map.decode(&q, &mut raised);
+        assert_eq!(raised.shear.degree(), 3);
+        assert!((raised.coupling.unwrap().warp + 12.0).abs() < 1e-9);
+        // |κ ê| ≤ K whatever the variables
+        for v in [-1e4, -3.0, 0.0, 40.0] {
+            let mut r = p.clone();
+            r[4] = v;
+            map.decode(&r, &mut back);
+            let k = back.coupling.unwrap().warp * 2.0 * map.xhat.sqrt();
+            assert!(k.abs() <= COUPLING_SPAN, "v = {v}: κê = {k}");
+        }
+        // chain: F(k) = Σ wᵢ kᵢ over the law's parameters, against central differences in p
+        // (a12 follows a11 and a22 by its rule, so F sees it too)
+        let nk = l.params().len();
+        // (weights over each parameter's size, so that F is O(1) and differences keep digits)
+        let k0 = l.params();
+        let w: Vec<f64> = (0..nk)
+            .map(|i| (1.0 + 0.37 * i as f64) / k0[i].abs().max(1.0))
+            .collect();
+        let f = |q: &[f64]| {
+            let mut m = l.clone();
+            map.decode(q, &mut m);
+            m.params().iter().zip(&w).map(|(a, b)| a * b).sum::<f64>()
+        };
+        let dp = map.chain(&p, &l, &w);
+        for k in 0..p.len() {
+            let h = 1e-6 * p[k].abs().max(1.0);
+            let (mut qp, mut qm) = (p.clone(), p.clone());
+            qp[k] += h;
+            qm[k] -= h;
+            let fd = (f(&qp) - f(&qm)) / (2.0 * h);
+            assert!(
+                (fd - dp[k]).abs() <= 1e-6 * dp[k].abs().max(1.0),
+                "variable {k}: {fd} vs {}",
+                dp[k]
+            );
+        }
+        // the coupling's parameters are among those the stage wants
+        let want = map.wanted(&l);
+        assert_eq!(want.len(), nk + 1);
+        assert!(want[nk - 2] && want[nk - 1]);
+    }
+
     #[test]
     fn exponents_stay_bounded_and_their_slope_is_exact() {
         let map = StageMap {
