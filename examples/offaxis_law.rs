@@ -14,8 +14,9 @@
 //!
 //! Variants, every one degree 2 in warp, weft and shear (degree 3 as a check that degrees do
 //! not close the gap): a12 by the fitter's default rule (½ min(a11, a22)) or free, coupling off
-//! or on. Least squares on relative force errors, each point alike; derivatives by central
-//! differences (the homogeneous strip costs microseconds).
+//! or on; the coupled variants start from the separable optimum with κ = 0, as the fitter's
+//! trial does. Least squares on relative force errors, each point alike; derivatives by
+//! central differences (the homogeneous strip costs microseconds).
 //!
 //! `cargo run --release --example offaxis_law -- FILE.json [FILE.json ...] [--strain E]`
 
@@ -174,8 +175,15 @@ fn residuals(law: &Orthotropic, curves: &[Curve]) -> Option<Vec<f64>> {
     r.iter().all(|v| v.is_finite()).then_some(r)
 }
 
-/// The best of a few runs of the minimiser; returns the law and each curve's mean |error|.
-fn fit(v: Variant, curves: &[Curve], xhat: [f64; 3], ehat: f64) -> (Orthotropic, Vec<f64>) {
+/// The best of a few runs of the minimiser (from `from`, or from the secant starts with the
+/// exponents shifted); returns the law, each curve's mean |error| and the variables.
+fn fit(
+    v: Variant,
+    curves: &[Curve],
+    xhat: [f64; 3],
+    ehat: f64,
+    from: Option<&[f64]>,
+) -> (Orthotropic, Vec<f64>, Vec<f64>) {
     let opts = OptimOptions {
         method: Method::Hybrid,
         max_iterations: 400,
@@ -185,8 +193,16 @@ fn fit(v: Variant, curves: &[Curve], xhat: [f64; 3], ehat: f64) -> (Orthotropic,
         max_step: 0.5,
     };
     let mut best: Option<(f64, Vec<f64>)> = None;
-    for shift in [0.0, 2.0, -2.0] {
-        let mut p = start(v, curves);
+    let shifts: &[f64] = if from.is_some() {
+        &[0.0]
+    } else {
+        &[0.0, 2.0, -2.0]
+    };
+    for &shift in shifts {
+        let mut p = match from {
+            Some(f) => f.to_vec(),
+            None => start(v, curves),
+        };
         let n = p.len();
         let o = 3 + usize::from(v.a12_free);
         for k in 0..3 {
@@ -229,7 +245,7 @@ fn fit(v: Variant, curves: &[Curve], xhat: [f64; 3], ehat: f64) -> (Orthotropic,
         .chunks(POINTS)
         .map(|c| c.iter().map(|v| v.abs()).sum::<f64>() / POINTS as f64)
         .collect();
-    (law, per)
+    (law, per, p)
 }
 
 fn main() {
@@ -276,8 +292,17 @@ fn main() {
         let head: Vec<String> = ANGLES.iter().map(|a| format!("{a}°")).collect();
         println!("| variant | {} | mean | κ₁, κ₂ |", head.join(" | "));
         println!("|---|{}---|---|", "---|".repeat(ANGLES.len()));
+        // the separable optimum of each a12 choice, the coupled variant's start (κ = 0)
+        let mut separable: Vec<(bool, Vec<f64>)> = Vec::new();
         for v in variants {
-            let (law, per) = fit(v, &curves, xhat, e);
+            let from = v.coupled.then(|| {
+                let p = &separable.iter().find(|(a, _)| *a == v.a12_free).unwrap().1;
+                [&p[..], &[0.0, 0.0]].concat()
+            });
+            let (law, per, p) = fit(v, &curves, xhat, e, from.as_deref());
+            if !v.coupled && v.degree == 2 {
+                separable.push((v.a12_free, p));
+            }
             let mean = per.iter().sum::<f64>() / per.len() as f64;
             let cells: Vec<String> = per.iter().map(|p| format!("{:.2} %", 100.0 * p)).collect();
             let k = law.coupling.map_or("–".to_string(), |c| {

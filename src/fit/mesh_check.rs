@@ -197,7 +197,9 @@ impl MeshCheck {
         self.changes
             .iter()
             .filter(|(n, _)| {
-                n == stiffness || (n.starts_with(prefix) && n.contains("_tangent_at_"))
+                n == stiffness
+                    || (n.starts_with(prefix)
+                        && (n.contains("_tangent_at_") || n.contains("_coupling_factor_")))
             })
             .map(|(_, c)| (c + tau).abs())
             .reduce(f64::max)

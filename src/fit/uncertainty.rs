@@ -96,7 +96,9 @@ pub(super) const RESPONSE_AT: [f64; 3] = [0.5, 0.75, 1.0];
 
 /// What a tensile stage's data determine even where μ and α trade off against each other: the
 /// tangent stiffness c·η'(E²) of the stage's term at a few strains E across the tested range
-/// ([`RESPONSE_AT`] of √x̂), named `<dir>_tangent_at_<percent>`, with values and ∂/∂p.
+/// ([`RESPONSE_AT`] of √x̂), named `<dir>_tangent_at_<percent>`, and for a coupled shear the
+/// coupling's factor on the shear stiffness at the largest strain, `bias_coupling_factor_warp`
+/// and `_weft`; with values and ∂/∂p.
 pub(super) fn response_rows(
     map: &StageMap,
     p: &[f64],
@@ -129,6 +131,23 @@ pub(super) fn response_rows(
         for i in 0..d {
             dg[(k, o + d - 1 + i)] = c * dp[d + i][1] * map.dalpha(p[o + d - 1 + i]);
         }
+    }
+    // a coupled shear's factor exp(κ ê) on the shear stiffness at the stage's largest axial
+    // strain ê, per yarn: its relative change is ê Δκ, what the coupling's change does to the
+    // law (κ's own relative change means nothing near κ = 0)
+    if let (true, Some(c)) = (map.coupling, law.coupling) {
+        let ehat = 2.0 * map.xhat.sqrt();
+        let mut rows = DMatrix::zeros(2, n);
+        for (i, (name, kappa)) in [("warp", c.warp), ("weft", c.weft)].into_iter().enumerate() {
+            let k = o + 2 * d - 1 + i;
+            let factor = (kappa * ehat).exp();
+            names.push(format!("bias_coupling_factor_{name}"));
+            values.push(factor);
+            rows[(i, k)] = factor * ehat * map.dkappa(p[k]);
+        }
+        let top = dg.nrows();
+        dg = dg.insert_rows(top, 2, 0.0);
+        dg.rows_mut(top, 2).copy_from(&rows);
     }
     (names, values, dg)
 }

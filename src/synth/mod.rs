@@ -2,7 +2,8 @@
 //! as a [`FabricDataset`] the fitter can be checked against (its answer is known).
 //!
 //! * Tensile strips 50 × 75 mm at 90° (warp), 0° (weft), 45° (bias), 22.5° and 67.5° (the last
-//!   two are validation angles), `points` elongations evenly spaced from max_strain/points to
+//!   two are validation angles under the paper's protocol), then any `extra_angles`
+//!   (`synth --angles`), `points` elongations evenly spaced from max_strain/points to
 //!   max_strain times the gauge length, on the `mesh` given.
 //! * Two cantilevers (90° and 0°), 25 mm wide, each at the overhang whose drape angle is 41.5°
 //!   (to 1e-4°): bracketed from twice the bending length c = (D/(ρg))^⅓, D = a·τ³/12 (a11 for
@@ -100,6 +101,9 @@ pub struct SynthOptions {
     /// How the strips integrate the yarn terms (auto by default; the cantilevers always
     /// decide by the material).
     pub yarn_rule: crate::assembly::YarnRule,
+    /// Tensile angles beyond the five of [`SYNTH_TENSILE`] (degrees from the weft, in
+    /// [0, 90], none of the five), written after them as `a<angle>-<repeat>.csv`.
+    pub extra_angles: Vec<f64>,
 }
 
 impl Default for SynthOptions {
@@ -114,6 +118,7 @@ impl Default for SynthOptions {
             mesh: (16, 24),
             grading: crate::mesh::Grading::UNIFORM,
             yarn_rule: crate::assembly::YarnRule::Auto,
+            extra_angles: Vec::new(),
         }
     }
 }
@@ -175,6 +180,15 @@ impl SynthOptions {
         }
         if self.points == 0 {
             return bad("points must be at least 1".into());
+        }
+        for (i, &a) in self.extra_angles.iter().enumerate() {
+            let taken =
+                SYNTH_TENSILE.iter().any(|t| t.0 == a) || self.extra_angles[..i].contains(&a);
+            if !(a.is_finite() && (0.0..=90.0).contains(&a)) || taken {
+                return bad(format!(
+                    "each extra tensile angle must be in [0, 90] degrees and not one already written (90, 0, 45, 22.5, 67.5 or an earlier one), got {a:?}"
+                ));
+            }
         }
         if self.repeats == 0 {
             return bad("repeats must be at least 1".into());
@@ -318,7 +332,16 @@ fn synth_tensile(
         Ok(curve.iter().map(|p| p.0).collect())
     };
     let mut tensile = Vec::new();
-    for (angle, stem) in SYNTH_TENSILE {
+    let extra: Vec<(f64, String)> = opts
+        .extra_angles
+        .iter()
+        .map(|&a| (a, format!("a{a}")))
+        .collect();
+    let all = SYNTH_TENSILE
+        .iter()
+        .map(|&(a, stem)| (a, stem.to_string()))
+        .chain(extra);
+    for (angle, stem) in all {
         // the exact curve, shared by every repeat cut at the nominal angle
         let mut exact: Option<Vec<f64>> = None;
         for r in 1..=opts.repeats {
@@ -669,6 +692,27 @@ mod tests {
                     ..base.clone()
                 },
                 "the strip mesh",
+            ),
+            (
+                SynthOptions {
+                    extra_angles: vec![15.0, 45.0],
+                    ..base.clone()
+                },
+                "each extra tensile angle",
+            ),
+            (
+                SynthOptions {
+                    extra_angles: vec![15.0, 95.0],
+                    ..base.clone()
+                },
+                "each extra tensile angle",
+            ),
+            (
+                SynthOptions {
+                    extra_angles: vec![30.0, 30.0],
+                    ..base.clone()
+                },
+                "each extra tensile angle",
             ),
         ] {
             let e = opts.check().unwrap_err().to_string();

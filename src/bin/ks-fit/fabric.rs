@@ -467,7 +467,7 @@ pub fn cmd_synth(
         kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
     let comment = format!(
         "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
-         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{} --yarn-rule {}\n\
+         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{} --yarn-rule {}{}\n\
          tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees{}",
         material.display(),
         lab.model_name(),
@@ -482,6 +482,12 @@ pub fn cmd_synth(
         opts.grading.across,
         opts.grading.along,
         opts.yarn_rule.name(),
+        if opts.extra_angles.is_empty() {
+            String::new()
+        } else {
+            let a: Vec<String> = opts.extra_angles.iter().map(|a| a.to_string()).collect();
+            format!(" --angles {}", a.join(","))
+        },
         data.notes
             .iter()
             .map(|n| format!("\n{n}"))

@@ -324,6 +324,11 @@ enum Command {
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Tensile angles beyond the five always written (90, 0, 45, 22.5, 67.5), degrees from
+        /// the weft, comma-separated (e.g. 15,30,60,75 for the 15° steps of an off-axis study);
+        /// written as a<angle>-<repeat>.csv and fitted by default.
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        angles: Vec<f64>,
         /// Tensile strip mesh, faces across × along.
         #[arg(long, value_parser = parse_mesh, default_value = "16x24")]
         mesh: (usize, usize),
@@ -533,6 +538,7 @@ fn main() -> ExitCode {
             noise,
             misalign,
             seed,
+            angles,
             mesh,
             grading,
             yarn_rule,
@@ -551,6 +557,7 @@ fn main() -> ExitCode {
                 mesh,
                 grading,
                 yarn_rule,
+                extra_angles: angles,
             },
             force,
         )
