@@ -106,6 +106,15 @@ fn a_coupled_fabric_gets_its_coupling_and_every_off_axis_strip_follows() {
         assert!(k < -5.0, "κ {key} = {k} (made with −15)");
     }
     let worst = |d: &toml::Table| OFF_AXIS.iter().map(|&a| error_at(d, a)).fold(0.0, f64::max);
+    let says = |d: &toml::Table, what: &str| {
+        d["fit"]["identifiability"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l.as_str().is_some_and(|l| l.contains(what)))
+    };
+    assert!(says(&auto, "tension–shear coupling κ1 = "), "{auto:?}");
+    assert!(!says(&off, "tension–shear coupling"));
     let (with, without) = (worst(&auto), worst(&off));
     assert!(with < 0.01, "coupled: worst off-axis error {with}");
     assert!(
@@ -145,6 +154,13 @@ fn a_separable_fabric_keeps_the_separable_law() {
         "{log}"
     );
     assert!(auto.get("shear_coupling").is_none());
+    let lines = auto["fit"]["identifiability"].as_array().unwrap();
+    assert!(
+        lines.iter().any(|l| l.as_str().is_some_and(
+            |l| l.contains("coupling: assumed absent") && l.contains("tried and not kept")
+        )),
+        "{lines:?}"
+    );
     let e = auto["fit"]["shear_coupling_errors"].as_table().unwrap();
     assert!(e["shape_with"].as_float() > e["shape_without"].as_float().map(|v| 0.7 * v));
 }

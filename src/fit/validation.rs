@@ -375,6 +375,22 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             )
         });
     }
+    // the tension–shear coupling: what the off-axis strips said of it
+    use super::coupling::CouplingOutcome;
+    let coupling = match (&f.coupling, l.coupling) {
+        (CouplingOutcome::Kept { without, with }, Some(c)) => Some(format!(
+            "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty])",
+            c.warp, c.weft
+        )),
+        (CouplingOutcome::Rejected { why, .. }, _) => Some(format!(
+            "tension–shear coupling: assumed absent (the separable law): tried and not kept, {why}"
+        )),
+        (CouplingOutcome::NotTried, _) => Some(
+            "tension–shear coupling: assumed absent (the separable law): one off-axis angle cannot tell it from the shear law's own nonlinearity (fit two or more off-axis angles to test it)".to_string(),
+        ),
+        _ => None,
+    };
+    out.extend(coupling);
     out.push(if k.thickness.is_some() {
         format!("thickness τ = {:.4} mm: known", tau * 1e3)
     } else if f.bending.is_some() {
