@@ -8,16 +8,16 @@
 
 pub mod arcsim;
 pub mod bending;
+mod eta;
 pub mod file;
 pub mod json;
-mod eta;
 mod orthotropic;
 
 pub use bending::BendingRigidity;
+pub use eta::Eta;
 pub use file::{
     load_material, material_toml, parse_material, FabricMaterial, MaterialFileError, MODULUS_RANGE,
 };
-pub use eta::Eta;
 pub use orthotropic::{Cutoffs, Orthotropic, ParamResponse, ShearCoupling};
 
 use nalgebra::{Matrix3, Vector3};
