@@ -43,6 +43,7 @@ pub mod coupling;
 pub mod html;
 mod ladder;
 pub mod map;
+mod measures;
 mod mesh_check;
 pub mod optim;
 pub mod plausible;
@@ -63,9 +64,9 @@ use crate::material::{BendingRigidity, Cutoffs, Eta, FabricMaterial, Orthotropic
 use crate::scene::{SceneError, StripRig};
 pub use bending::BendingMode;
 use map::{A12Rule, Direction, StageMap};
+use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
 pub use mesh_check::{MeshCheck, MeshCheckMode};
-use nalgebra::DMatrix;
-use optim::{Evaluation, Method};
+use optim::Method;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
 pub use refine::TestMeshes;
@@ -266,55 +267,6 @@ const NEAR_ANGLE_DEG: f64 = 1.5;
 
 /// ([width, rest length, angle] bits, mesh level, node bits) of a cached strip.
 type RigKey = ([u64; 3], (usize, usize), Vec<u64>);
-
-/// Green strain along the axis at an elongation.
-fn green(dl: f64, length: f64) -> f64 {
-    let l = 1.0 + dl / length;
-    0.5 * (l * l - 1.0)
-}
-
-fn to_evaluation(r: Vec<f64>, j: Vec<Vec<f64>>, n: usize, jac: bool) -> Evaluation {
-    let jacobian = jac.then(|| {
-        let mut m = DMatrix::zeros(r.len(), n);
-        for (i, row) in j.iter().enumerate() {
-            for (c, v) in row.iter().enumerate() {
-                m[(i, c)] = *v;
-            }
-        }
-        m
-    });
-    Evaluation {
-        residuals: r,
-        jacobian,
-    }
-}
-
-/// Shape misfit of a set of curves: each curve's mean |relative error| after its own best
-/// force scale, averaged over the curves. `lens` are the curves' point counts and `rel`
-/// their relative errors in order. Repeat-to-repeat scatter is mostly a scale (strip width,
-/// yarn count per strip), which no law can fit; the degree of η is chosen on what is left.
-fn shape_error(lens: &[usize], rel: &[f64]) -> f64 {
-    let mut k = 0;
-    let mut sum = 0.0;
-    for &n in lens {
-        let q: Vec<f64> = rel[k..k + n].iter().map(|r| 1.0 + r).collect();
-        k += n;
-        let s = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>().max(1e-300);
-        sum += q.iter().map(|v| (s * v - 1.0).abs()).sum::<f64>() / n.max(1) as f64;
-    }
-    sum / lens.len().max(1) as f64
-}
-
-fn mean_abs(r: &[f64]) -> f64 {
-    r.iter().map(|v| v.abs()).sum::<f64>() / r.len().max(1) as f64
-}
-
-/// Mean |r| over the finite values only: the errors of a curve whose excluded points (a
-/// saddle's, see `rigs::node_force`) are NaN.
-fn mean_abs_finite(r: &[f64]) -> f64 {
-    let ok: Vec<f64> = r.iter().copied().filter(|v| v.is_finite()).collect();
-    mean_abs(&ok)
-}
 
 /// Whether the data determine a parameter (unknown names count as determined).
 fn is_determined(uncertainty: &[uncertainty::ParamError], name: &str) -> bool {
