@@ -113,7 +113,7 @@ pub(super) fn ladder(
                 // degree on the shell model itself
                 f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
             } else {
-                f.shell_stage(maps[k], &strips[k], level, li == 0, false)?
+                f.shell_stage(maps[k], &strips[k], level, li == 0, false, None)?
                     .expect("a stage that raises no degree always runs")
             };
             if k == 2 && li == 0 {

@@ -319,6 +319,8 @@ struct Fitter<'a> {
     /// the rms relative error of the last tensile stage run (of the kept degree after a
     /// degree ladder)
     stage_rms: f64,
+    /// the shape and rms errors at a screened trial's mapped start, when it was given up there
+    screened: Option<(f64, f64)>,
 }
 
 impl Fitter<'_> {
@@ -549,6 +551,7 @@ pub fn fit(
         yarns: None,
         coupling: coupling::CouplingOutcome::Off,
         stage_rms: f64::NAN,
+        screened: None,
     };
     let dirs = [Direction::Warp, Direction::Weft, Direction::Shear];
     let strips: Vec<Vec<usize>> = dirs.iter().map(|&d| f.stage_strips(d)).collect();

@@ -267,7 +267,7 @@ fn double_and_refit(
             "{} stage refitted on its strips' own meshes",
             maps[k].dir.name()
         ));
-        f.shell_stage(maps[k], &stages[k], last, false, false)?;
+        f.shell_stage(maps[k], &stages[k], last, false, false, None)?;
     }
     let data = f.data;
     if f.own_bending {

@@ -148,6 +148,7 @@ impl Fitter<'_> {
         level: (usize, usize),
         strain_range: bool,
         raise: bool,
+        screen: Option<(f64, f64)>,
     ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
         let t0 = Instant::now();
         let mut rigs = Vec::new();
@@ -252,7 +253,22 @@ impl Fitter<'_> {
             m.kept,
             m.shell_solves
         );
-        if raise && m.kept == 0 {
+        // a trial screened at its mapped start: given up unless the shape error has not
+        // risen or the rms error already fell by the degree gain there
+        let screened_out = match screen {
+            Some((shape0, rms0)) => {
+                let r = problem(&p, false).map_err(fail)?.residuals;
+                let shape = super::shape_error(&lens, &super::surrogate::unweight(&r, &lens));
+                let rms = (m.after / ncurves.max(1) as f64).sqrt();
+                let out = shape > shape0 && rms > self.opts.degree_gain * rms0;
+                if out {
+                    self.screened = Some((shape, rms));
+                }
+                out
+            }
+            None => false,
+        };
+        if (raise && m.kept == 0) || screened_out {
             self.stats.evaluations += evals;
             self.stats.newton_iterations += newton;
             self.stats.unstable_solves += unstable;
@@ -309,14 +325,7 @@ impl Fitter<'_> {
             .rev()
             .find(|(q, _, _)| *q == p)
             .map_or(err, |(_, r, _)| {
-                let mut rel = Vec::with_capacity(r.len());
-                let mut k = 0;
-                for &n in &lens {
-                    let w = 1.0 / (n as f64).sqrt();
-                    rel.extend(r[k..k + n].iter().map(|v| v / w));
-                    k += n;
-                }
-                super::shape_error(&lens, &rel)
+                super::shape_error(&lens, &super::surrogate::unweight(r, &lens))
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&seen, &p) {
@@ -422,7 +431,7 @@ impl Fitter<'_> {
                 }
                 None => map.decode(cand, &mut self.law),
             }
-            let run = self.shell_stage(map, strips, level, true, best.is_some());
+            let run = self.shell_stage(map, strips, level, true, best.is_some(), None);
             let (err, range) = match run {
                 Ok(Some(r)) => r,
                 Ok(None) => {
