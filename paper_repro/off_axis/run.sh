@@ -5,7 +5,8 @@
 #    one separable control) synthesised on graded 32x48 cages, twice as fine as the finest
 #    ladder level, at nine angles (0-90° in 15° steps, and 22.5°, 67.5°), 5 % strain; each
 #    fitted with the default settings under --shear-coupling auto and off (the control under
-#    auto only). Writes the fitted materials, the printed tables and logs, and results.md.
+#    auto only). Writes the fitted materials, the printed tables and logs, and results.md
+#    (ONLY="plain" refits those materials alone; SUMMARY_ONLY=1 rewrites the tables).
 # 2. If the Wang et al. (2011) ARCSim materials are at $WANG_DIR (default
 #    ../shared/data/wang2011-arcsim-materials; never committed), the law-only study of
 #    examples/offaxis_law.rs on their five woven fabrics: wang.md.
@@ -36,7 +37,7 @@ value() {
 outcome() {
   awk '/^\[fit\]/ { t = 1 } t && /^shear_coupling = / { match($0, /"[^"]*"/); print substr($0, RSTART + 1, RLENGTH - 2); exit }' "$1"
 }
-for m in coupled skewed plain; do
+for m in ${ONLY:-coupled skewed plain}; do
   [ -n "${SUMMARY_ONLY:-}" ] && break
   $bin synth --material $out/materials/$m.toml --out "$tmp/$m" --points 8 --mesh 32x48 \
     --grading 0.8,0.8 --max-strain 0.05 --angles 15,30,60,75 2> "$out/$m-synth.log"
