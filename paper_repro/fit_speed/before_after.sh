@@ -3,7 +3,9 @@
 # and for the binary of an earlier commit, run one after the other on this machine (default
 # settings both; the earlier commit's defaults are its own). Usage:
 #   bash paper_repro/fit_speed/before_after.sh COMMIT [RUNS]
-# Writes paper_repro/fit_speed/before_after.md with the median of RUNS runs (default 1).
+# Writes paper_repro/fit_speed/before_after.md with the median of RUNS runs (default 1), and
+# each binary's count of Newton iterations (the fitted file's newton_iterations: each binary
+# counts by its own rules; since 2026-12-04 the attempts a strip gave up on are counted too).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 base_commit=${1:?usage: before_after.sh COMMIT [RUNS]}
@@ -24,8 +26,8 @@ median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2
   echo "Machine: $(nproc) cores. Command: \`bash paper_repro/fit_speed/before_after.sh $base_commit $runs\`;"
   echo "median of $runs run(s) per binary; wall and CPU (user + system) seconds."
   echo
-  echo "| fabric | before wall s | before CPU s | after wall s | after CPU s |"
-  echo "|---|---|---|---|---|"
+  echo "| fabric | before wall s | before CPU s | before Newton its | after wall s | after CPU s | after Newton its |"
+  echo "|---|---|---|---|---|---|---|"
 } > "$tmp/table.md"
 for f in canvas cotton silk denim wool; do
   row="| $f"
@@ -39,7 +41,8 @@ for f in canvas cotton silk denim wool; do
       read -r wall user sys < <(tail -n 1 "$tmp/t")
       walls+=("$wall"); cpus+=("$(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')")
     done
-    row="$row | $(printf '%s\n' "${walls[@]}" | median) | $(printf '%s\n' "${cpus[@]}" | median)"
+    its=$(awk '$1 == "newton_iterations" { print $3; exit }' "$tmp/$f-$which.toml")
+    row="$row | $(printf '%s\n' "${walls[@]}" | median) | $(printf '%s\n' "${cpus[@]}" | median) | $its"
   done
   echo "$row |" >> "$tmp/table.md"
 done

@@ -162,6 +162,7 @@ impl TensileStrip {
             equilibria: vec![None; elongations.len()],
             tangents: vec![None; elongations.len()],
             earlier: vec![Vec::new(); elongations.len()],
+            spent: 0,
             solved_params: vec![None; elongations.len()],
             params: {
                 let mut k = material.law.params();
@@ -215,6 +216,10 @@ pub struct StripRig {
     /// parameters (law, then thickness), for the secant predictor where no tangent is at hand
     /// (see [`StripRig::warm_start`])
     earlier: Vec<Vec<(Vec<Vec3>, Vec<f64>)>>,
+    /// Newton iterations of attempts given up on since the last point was solved (a warm
+    /// start that did not converge, sub-steps): added to the point's report, so that counts
+    /// of iterations are of all the work done
+    spent: usize,
     /// per point: the parameters of the stored equilibrium
     solved_params: Vec<Option<Vec<f64>>>,
     params: Vec<f64>,
@@ -278,26 +283,45 @@ impl StripRig {
         let mut out = Vec::with_capacity(self.elongations.len());
         // the last equilibrium: elongation, positions, and ∂q/∂(elongation) there
         let mut previous: Last = None;
+        // the equilibrium before `previous` (elongation, positions): the predictor's curvature
+        let mut before: Option<(f64, Vec<Vec3>)> = None;
+        // the last point did not start from a good warm start: this one's is measured
+        // against the predictor from the last equilibrium first
+        let mut doubt = false;
         for i in 0..self.elongations.len() {
             let dl = self.elongations[i];
-            let warm = self.warm_start(i);
+            let mut warm = self.warm_start(i);
+            // a point solved before: a fitter's trial caps its cold solve (`retry_iterations`)
+            let stored = warm.is_some();
+            if doubt {
+                warm =
+                    warm.filter(|w| self.warm_beats_predictor(w, &previous, before.as_ref(), dl));
+            }
             // a warm start that needs many iterations has wandered off (parameters far from
             // the last run's): give up early and solve from the predictor instead
-            let (x, report, lin) = match warm {
-                Some(x) => {
-                    match self.solve_at(dl, x, self.solver.max_iterations.min(WARM_ITERATIONS)) {
-                        Ok(r) => r,
-                        Err(_) => {
-                            let limit = self
-                                .retry_iterations
-                                .unwrap_or(self.solver.max_iterations)
-                                .min(self.solver.max_iterations);
-                            self.solve_cold(&previous, dl, limit)?
-                        }
-                    }
-                }
-                None => self.solve_cold(&previous, dl, self.solver.max_iterations)?,
+            let warm_solved = match warm {
+                Some(x) => self
+                    .solve_at(dl, x, self.solver.max_iterations.min(WARM_ITERATIONS))
+                    .ok(),
+                None => None,
             };
+            doubt = warm_solved
+                .as_ref()
+                .is_none_or(|r| r.1.initial_residual.unwrap_or(0.0) > warm::POOR_START);
+            let (x, mut report, lin) = match warm_solved {
+                Some(r) => r,
+                None if stored => {
+                    let limit = self
+                        .retry_iterations
+                        .unwrap_or(self.solver.max_iterations)
+                        .min(self.solver.max_iterations);
+                    self.solve_cold(&previous, before.as_ref(), dl, limit)?
+                }
+                None => {
+                    self.solve_cold(&previous, before.as_ref(), dl, self.solver.max_iterations)?
+                }
+            };
+            report.iterations += std::mem::take(&mut self.spent);
             let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
                 stage: "reaction".into(),
                 source: SolveError::StartOutOfDomain(e.to_string()),
@@ -345,20 +369,36 @@ impl StripRig {
             }
             self.equilibria[i] = Some(x.clone());
             self.solved_params[i] = params;
+            before = previous.map(|p| (p.0, p.1));
             previous = Some((dl, x, slope));
         }
         Ok(out)
     }
 
     /// The predictor at elongation `dl`: the last equilibrium moved along its tangent to the
-    /// new jaw position (Euler continuation on the factorised tangent), or, where there is
-    /// none (the first point, an unstable equilibrium), stretched affinely.
-    fn predict(&self, previous: &Last, dl: f64) -> Vec<Vec3> {
+    /// new jaw position (Euler continuation on the factorised tangent), plus, where the
+    /// equilibrium `before` it is known, the quadratic term of the path through the two
+    /// (x(e) = x₁ + (e − e₁) x₁′ + c (e − e₁)², c from x₀ at e₀: what Euler missed over the last
+    /// step, scaled by the square of the step ratio); or, where there is no tangent (the
+    /// first point, an unstable equilibrium), stretched affinely.
+    fn predict(&self, previous: &Last, before: Option<&(f64, Vec<Vec3>)>, dl: f64) -> Vec<Vec3> {
         match previous {
-            Some((current, x, Some(slope))) => {
-                let mut x = x.clone();
+            Some((current, x1, Some(slope))) => {
+                let mut x = x1.clone();
                 let step: Vec<f64> = slope.iter().map(|v| v * (dl - current)).collect();
                 self.system.advance(&mut x, &step);
+                if let Some((e0, x0)) = before.filter(|b| b.0 < *current) {
+                    let h = current - e0;
+                    let mut back = x1.clone();
+                    let step: Vec<f64> = slope.iter().map(|v| -v * h).collect();
+                    self.system.advance(&mut back, &step);
+                    let w = ((dl - current) / h).powi(2);
+                    for ((p, a), b) in x.iter_mut().zip(x0).zip(&back) {
+                        for c in 0..3 {
+                            p[c] += w * (a[c] - b[c]);
+                        }
+                    }
+                }
                 x
             }
             _ => {
@@ -375,8 +415,8 @@ impl StripRig {
         }
     }
 
-    /// The equilibrium at elongation `dl` from the start `x`.
-    fn solve_at(&mut self, dl: f64, mut x: Vec<Vec3>, max_iterations: usize) -> Solved {
+    /// Sets the constraints of elongation `dl` and puts the clamped DOFs of `x` there.
+    fn place(&mut self, dl: f64, x: &mut [Vec3]) {
         let offsets: Vec<f64> = self
             .base
             .iter()
@@ -391,11 +431,28 @@ impl StripRig {
         for &d in &self.top_fixed {
             x[d / 3][d % 3] = rest[d / 3][d % 3] + if d % 3 == 1 { dl } else { 0.0 };
         }
+    }
+
+    /// The relative residual of the start `x` at elongation `dl` (one gradient assembly;
+    /// infinite where the law is undefined there).
+    fn start_residual(&mut self, dl: f64, x: &[Vec3]) -> f64 {
+        let mut x = x.to_vec();
+        self.place(dl, &mut x);
+        crate::solve::relative_residual(&self.model, &self.system, &x).unwrap_or(f64::INFINITY)
+    }
+
+    /// The equilibrium at elongation `dl` from the start `x`.
+    fn solve_at(&mut self, dl: f64, mut x: Vec<Vec3>, max_iterations: usize) -> Solved {
+        self.place(dl, &mut x);
         let opts = NewtonOptions {
             max_iterations,
             ..self.solver
         };
-        crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts)
+        let solved = crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts);
+        if let Err(SolveError::NotConverged { iterations, .. }) = &solved {
+            self.spent += iterations;
+        }
+        solved
             .map(|(report, lin)| (x, report, lin))
             .map_err(|source| SceneError::Solve {
                 stage: format!("elongation {:.4} mm", dl * 1e3),
@@ -408,8 +465,14 @@ impl StripRig {
     /// 8 equal sub-steps, each predicted from the one before. A large step into a wrinkling
     /// strip can land where Newton stagnates (measured: cotton at 45° on a graded 8 × 12
     /// cage, 4 → 6 mm in one step, relative residual stuck at 1; two sub-steps solve it).
-    fn solve_cold(&mut self, previous: &Last, dl: f64, max_iterations: usize) -> Solved {
-        let first = self.solve_at(dl, self.predict(previous, dl), max_iterations);
+    fn solve_cold(
+        &mut self,
+        previous: &Last,
+        before: Option<&(f64, Vec<Vec3>)>,
+        dl: f64,
+        max_iterations: usize,
+    ) -> Solved {
+        let first = self.solve_at(dl, self.predict(previous, before, dl), max_iterations);
         if first.is_ok() || self.retry_iterations.is_some() {
             return first;
         }
@@ -419,7 +482,7 @@ impl StripRig {
             let mut solved = None;
             for k in 1..=n {
                 let e = start + (dl - start) * k as f64 / n as f64;
-                let x0 = self.predict(&last, e);
+                let x0 = self.predict(&last, None, e);
                 let Ok((x, report, lin)) = self.solve_at(e, x0, max_iterations) else {
                     break;
                 };
@@ -427,6 +490,8 @@ impl StripRig {
                 last = Some((e, x.clone(), slope));
                 if k == n {
                     solved = Some((x, report, lin));
+                } else {
+                    self.spent += report.iterations;
                 }
             }
             if let Some(s) = solved {

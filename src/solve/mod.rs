@@ -26,7 +26,7 @@ pub mod trust;
 
 pub use continuation::{continuation, ContinuationReport};
 pub use linearization::Linearization;
-pub use newton::{is_stable, newton, newton_linearized};
+pub use newton::{is_stable, newton, newton_linearized, relative_residual};
 pub use refine::Precision;
 pub use system::{FreeSystem, Slave};
 
@@ -183,6 +183,8 @@ pub struct SolveReport {
     pub energy: f64,
     /// ‖g_free‖ / force scale at the end.
     pub residual: f64,
+    /// ‖g_free‖ / force scale at the start (`None` before the first assembly).
+    pub initial_residual: Option<f64>,
     pub factorizations: usize,
     /// Backward-Euler steps taken, and why the solver turned to them.
     pub backward_euler_steps: usize,

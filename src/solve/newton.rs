@@ -38,6 +38,32 @@ pub fn is_stable(
     Ok(system.try_factor(&values)?.is_some())
 }
 
+/// The relative residual ‖g_free‖ / force scale of `x` (constraints applied), as the solver
+/// measures it at its first iteration (see the module docs of [`super`]): one gradient
+/// assembly, for choosing between starts.
+pub fn relative_residual(
+    model: &dyn ClothModel,
+    system: &FreeSystem,
+    x: &[Vec3],
+) -> Result<f64, SolveError> {
+    let mut x = x.to_vec();
+    system.apply_constraints(&mut x);
+    let mut grad = vec![[0.0; 3]; model.num_nodes()];
+    model
+        .assemble(&x, Want::Gradient, Some(&mut grad), None)
+        .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+    let external = model.external_load();
+    let mut internal = 0.0;
+    for (g, f) in grad.iter().zip(&external) {
+        for c in 0..3 {
+            internal += (g[c] + f[c]).powi(2);
+        }
+    }
+    let scale = internal.sqrt() + norm(&external.concat());
+    let gnorm = norm(&system.reduced(&grad));
+    Ok(if scale > 0.0 { gnorm / scale } else { gnorm })
+}
+
 /// Solves for equilibrium from `x` (fixed DOFs keep their values, slaved ones follow), in place.
 ///
 /// Each iteration assembles energy, gradient and Hessian and tests convergence. A Newton step
@@ -414,6 +440,9 @@ pub(super) fn linearize(
         b.gnorm
     };
     report.iterations = it;
+    if it == 0 && report.initial_residual.is_none() {
+        report.initial_residual = Some(report.residual);
+    }
     Ok((energy, b))
 }
 
