@@ -34,6 +34,8 @@ pub struct BendRig {
 pub struct BendPoint {
     pub drape_angle_deg: f64,
     pub dangle: Vec<f64>,
+    /// the last solve's report, with the iterations and factorisations of every attempt
+    /// (a warm start given up on, the load ramp's steps)
     pub report: SolveReport,
 }
 
@@ -89,12 +91,23 @@ impl BendRig {
             None => self.model.basis.control_points.clone(),
         };
         let warm = self.equilibrium.is_some();
+        // Newton iterations of a warm start given up on: counted in the report with the
+        // ramp's, so that the fitter's counts are of all the work done
+        let mut spent = 0;
         let solved = if warm {
-            newton(&self.model, &self.system, &mut x, &self.bend.solver).ok()
+            match newton(&self.model, &self.system, &mut x, &self.bend.solver) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    if let SolveError::NotConverged { iterations, .. } = e {
+                        spent = iterations;
+                    }
+                    None
+                }
+            }
         } else {
             None
         };
-        let report = match solved {
+        let mut report = match solved {
             Some(r) => r,
             None => {
                 x = self.model.basis.control_points.clone();
@@ -113,9 +126,14 @@ impl BendRig {
                     stage: format!("load factor {t:.4}"),
                     source,
                 })?;
-                cont.last
+                SolveReport {
+                    iterations: cont.iterations,
+                    factorizations: cont.factorizations,
+                    ..cont.last
+                }
             }
         };
+        report.iterations += spent;
         let surface = self.model.basis.surface();
         let stencil = |(face, u): (usize, f64), v: f64| {
             surface
