@@ -14,11 +14,13 @@ root=$(pwd)
 tmp=$(mktemp -d)
 trap 'git worktree remove --force "$tmp/base" >/dev/null 2>&1 || true; rm -rf "$tmp"' EXIT
 git worktree add -q "$tmp/base" "$base_commit"
-# the earlier commit shares this tree's release dependencies (only kshell itself is rebuilt)
-(cd "$tmp/base" && cargo build --release --bin ks-fit --target-dir "$root/target" -q)
-cp target/release/ks-fit "$tmp/ks-fit-base"
+# the earlier commit builds in a target directory of its own (target/before_after, kept for
+# the next run): sharing this tree's, cargo found the tree's own build fresh afterwards and
+# left the earlier binary in target/release, so that "after" ran the earlier commit
 cargo build --release --bin ks-fit -q
 cp target/release/ks-fit "$tmp/ks-fit-new"
+(cd "$tmp/base" && cargo build --release --bin ks-fit --target-dir "$root/target/before_after" -q)
+cp target/before_after/release/ks-fit "$tmp/ks-fit-base"
 median() { sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
 {
   echo "# ks-fit fit: before ($base_commit) and after (working tree)"

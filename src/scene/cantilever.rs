@@ -23,6 +23,14 @@ pub struct BendRig {
     model: ShellModel,
     system: FreeSystem,
     equilibrium: Option<Vec<Vec3>>,
+    /// the parameters (law, thickness, then the rigidities when the bending is its own) of
+    /// the last equilibrium and ∂q/∂k there (reduced, one row per parameter), where the last
+    /// run computed sensitivities: the next run starts from q + ∂q/∂k Δk
+    tangent: Option<(Vec<f64>, Vec<Vec<f64>>)>,
+    /// the law's parameters and the thickness of the current material
+    material_params: Vec<f64>,
+    /// the current parameters, in the order of `tangent` (set at each run)
+    params: Vec<f64>,
     /// (face, u) of the mid-width point of the clamped edge (v = 0) and of the tip (v = 1)
     edge: (usize, f64),
     tip: (usize, f64),
@@ -64,9 +72,46 @@ impl BendRig {
             model,
             system,
             equilibrium: None,
+            tangent: None,
+            material_params: material
+                .law
+                .params()
+                .into_iter()
+                .chain([material.thickness])
+                .collect(),
+            params: Vec::new(),
             edge,
             tip,
         })
+    }
+
+    /// The current parameters: law, thickness, then the rigidities when the bending is its
+    /// own (the order of the sensitivities).
+    fn current_params(&self) -> Vec<f64> {
+        let mut k = self.material_params.clone();
+        if let Some(b) = self.model.bending() {
+            k.extend([b.warp, b.weft, b.twist]);
+        }
+        k
+    }
+
+    /// The warm start: the last equilibrium, moved along ∂q/∂k to the current parameters
+    /// where the last run left a tangent for as many parameters.
+    fn warm_start(&self) -> Option<Vec<Vec3>> {
+        let mut x = self.equilibrium.clone()?;
+        if let Some((k0, dq)) = &self.tangent {
+            if k0.len() == self.params.len() {
+                let mut d = vec![0.0; self.system.num_free];
+                for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
+                    let dk = k - k0;
+                    if dk != 0.0 {
+                        d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
+                    }
+                }
+                self.system.advance(&mut x, &d);
+            }
+        }
+        Some(x)
     }
 
     /// Replaces the law and the thickness (mesh, clamp and warm start stay).
@@ -77,6 +122,8 @@ impl BendRig {
     ) -> Result<(), SceneError> {
         self.model.law = Arc::new(law.clone());
         self.model.set_thickness(thickness)?;
+        self.material_params = law.params();
+        self.material_params.push(thickness);
         Ok(())
     }
 
@@ -86,11 +133,10 @@ impl BendRig {
     }
 
     pub fn run(&mut self, sensitivities: bool) -> Result<BendPoint, SceneError> {
-        let mut x = match &self.equilibrium {
-            Some(x) => x.clone(),
-            None => self.model.basis.control_points.clone(),
-        };
-        let warm = self.equilibrium.is_some();
+        self.params = self.current_params();
+        let start = self.warm_start();
+        let warm = start.is_some();
+        let mut x = start.unwrap_or_else(|| self.model.basis.control_points.clone());
         // Newton iterations of a warm start given up on: counted in the report with the
         // ramp's, so that the fitter's counts are of all the work done
         let mut spent = 0;
@@ -166,15 +212,27 @@ impl BendRig {
                 .model
                 .sensitivities(&x)
                 .map_err(|e| fail(SolveError::StartOutOfDomain(e.to_string())))?;
-            sens.gradient
+            let mut dq = Vec::with_capacity(sens.gradient.len());
+            let dangle = sens
+                .gradient
                 .iter()
                 .map(|dg| {
                     let reduced = self.system.reduced(dg);
+                    // ∂q/∂k = −K⁻¹ Tᵀ ∂g/∂k, kept for the next run's start
+                    dq.push(
+                        lin.solve_reduced(&self.system, dg)
+                            .iter()
+                            .map(|v| -v)
+                            .collect(),
+                    );
                     -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>() * 180.0
                         / std::f64::consts::PI
                 })
-                .collect()
+                .collect();
+            self.tangent = (dq.len() == self.params.len()).then(|| (self.params.clone(), dq));
+            dangle
         } else {
+            self.tangent = None;
             Vec::new()
         };
         self.equilibrium = Some(x);
