@@ -101,14 +101,7 @@ impl BendRig {
         let mut x = self.equilibrium.clone()?;
         if let Some((k0, dq)) = &self.tangent {
             if k0.len() == self.params.len() {
-                let mut d = vec![0.0; self.system.num_free];
-                for ((k, k0), dqj) in self.params.iter().zip(k0).zip(dq) {
-                    let dk = k - k0;
-                    if dk != 0.0 {
-                        d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
-                    }
-                }
-                self.system.advance(&mut x, &d);
+                self.system.advance_along(&mut x, &self.params, k0, dq);
             }
         }
         Some(x)

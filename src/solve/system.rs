@@ -264,6 +264,19 @@ impl FreeSystem {
         self.step(x, d, 1.0);
     }
 
+    /// Moves `x`, an equilibrium at parameters `k0`, to parameters `k` along its parameter
+    /// tangent `dq` (∂q/∂k, reduced, one row per parameter): q + Σ (k − k0)_j ∂q/∂k_j.
+    pub fn advance_along(&self, x: &mut [Vec3], k: &[f64], k0: &[f64], dq: &[Vec<f64>]) {
+        let mut d = vec![0.0; self.num_free];
+        for ((k, k0), dqj) in k.iter().zip(k0).zip(dq) {
+            let dk = k - k0;
+            if dk != 0.0 {
+                d.iter_mut().zip(dqj).for_each(|(a, b)| *a += dk * b);
+            }
+        }
+        self.advance(x, &d);
+    }
+
     /// Tᵀ g over the free DOFs, for a full-length vector g.
     pub fn reduced(&self, g: &[Vec3]) -> Vec<f64> {
         let mut out = vec![0.0; self.num_free];
