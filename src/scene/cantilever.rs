@@ -17,7 +17,8 @@ use std::sync::Arc;
 
 /// An ASTM D1388 cantilever (self-weight only) set up once for repeated runs with changing
 /// material parameters: the fitter's forward model of a bend test. Each run starts from the
-/// last equilibrium, falling back to a load ramp from the flat strip.
+/// last equilibrium (moved along ∂q/∂k to the new parameters where the last run computed
+/// sensitivities), falling back to a load ramp from the flat strip.
 pub struct BendRig {
     bend: CantileverBend,
     model: ShellModel,
