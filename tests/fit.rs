@@ -662,6 +662,16 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
         .iter()
         .filter_map(|n| n.as_str())
         .collect();
+    // the interpolation check solves between the nodes on the mesh the nodes were solved on
+    // (it compared the refined 45° strip with the ladder's 4 × 6 one, and reported their
+    // difference, tens of per cent here, as interpolation error)
+    let interp: f64 = notes
+        .iter()
+        .find_map(|n| n.split("largest interpolation error ").nth(1))
+        .and_then(|r| r.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no interpolation note: {notes:?}"));
+    assert!(interp < 1.0, "interpolation error {interp} %: {notes:?}");
     for t in f["test"]
         .as_array()
         .unwrap()

@@ -74,8 +74,8 @@ impl Fitter<'_> {
     }
 
     /// Largest relative difference between each strip's interpolated model curve and solves
-    /// halfway between its nodes (first mesh level), strips solved side by side: (error,
-    /// angle) of the worst strip.
+    /// halfway between its nodes (first mesh level; a strip refined on its own mesh there, as
+    /// its nodes were), strips solved side by side: (error, angle) of the worst strip.
     fn interpolation_error(&mut self) -> Result<(f64, f64), FitError> {
         use rayon::prelude::*;
         let level = self.opts.ladder[0];
@@ -93,7 +93,10 @@ impl Fitter<'_> {
                 prev = e;
             }
             let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
-            t.mesh = super::rigs::strip_mesh(level, strip.width, strip.length);
+            // on the mesh its nodes were solved on (a strip refined on its own is compared
+            // with itself, not with the ladder's mesh: that difference is mesh error)
+            let own = self.strip_level(s, level);
+            t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.opts.grading;
             t.yarn_rule = self.yarns();
             t.solver.max_iterations = 500;
@@ -104,7 +107,7 @@ impl Fitter<'_> {
                 source,
             })?;
             // started between the node equilibria just solved with the same material
-            let key = self.rig_key(s, strip.angle_deg, self.strip_level(s, level));
+            let key = self.rig_key(s, strip.angle_deg, own);
             if let Some(nodes) = self.rigs.get(&key) {
                 rig.warm_between(nodes);
             }
@@ -259,12 +262,17 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     f.say("report: interpolation check (solves halfway between the nodes)");
     match f.interpolation_error() {
         Ok(worst) => f.notes.push(format!(
-        "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}){}",
+        "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}",
         f.opts.nodes,
         100.0 * worst.0,
         worst.1,
         f.opts.ladder[0].0,
         f.opts.ladder[0].1,
+        if f.prep.strips.iter().any(|s| s.refine > 0) && !f.ladder_meshes {
+            ", strips refined on their own meshes there"
+        } else {
+            ""
+        },
         if worst.0 > 1e-3 { "; warning: above 0.1 %, raise the node count" } else { "" }
     )),
         Err(e) => f.notes.push(format!("warning: the interpolation check could not be made: {e}")),
