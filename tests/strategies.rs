@@ -62,3 +62,43 @@ fn every_strategy_ends_stable_on_a_wrinkling_strip() {
         assert!(forces.iter().all(|f| *f > 0.0 && f.is_finite()));
     }
 }
+
+/// Stiff yarns over a soft shear (yarn-to-shear ratio 1000) at 22.5°: a one-step start from the
+/// predictor can crawl by backward Euler where two sub-steps converge in a few Newton
+/// iterations each. With the fitter's and synth's limit of 500 the first attempt is now held
+/// to 40 before the step is cut (measured on 16 × 24, the 6 → 7.5 mm point: 75 iterations of
+/// crawl before, 50 with the cap alone, 8 where the Euler predictor is taken for its lower
+/// energy), and the point lands on the same equilibrium as a run with half the step.
+#[test]
+fn a_stiff_yarn_strip_does_not_crawl_from_a_poor_predictor() {
+    let text = "name = \"ratio-1000\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 1.0e9\na22_pa = 3.0e8\ng12_pa = 1.0e6\n";
+    let m = kshell::material::parse_material(text, "ratio-1000.toml").unwrap();
+    let run = |steps: usize| {
+        let mut strip = TensileStrip::new(0.05, 0.075, 22.5);
+        strip.mesh = (16, 24);
+        strip.grading = kshell::scene::STRIP_GRADING;
+        strip.solver.max_iterations = 500;
+        let dl: Vec<f64> = (1..=steps)
+            .map(|k| 7.5e-3 * k as f64 / steps as f64)
+            .collect();
+        strip.run(&m, &dl).unwrap()
+    };
+    let coarse = run(5);
+    let fine = run(10);
+    for (k, p) in coarse.iter().enumerate() {
+        assert!(p.report.stable, "a saddle at {} m", p.elongation);
+        let q = &fine[2 * k + 1];
+        assert!((p.elongation - q.elongation).abs() < 1e-15);
+        let rel = (p.force - q.force).abs() / q.force;
+        assert!(
+            rel < 1e-6,
+            "{} m: {} N against {} N",
+            p.elongation,
+            p.force,
+            q.force
+        );
+    }
+    let its: Vec<usize> = coarse.iter().map(|p| p.report.iterations).collect();
+    eprintln!("iterations per point: {its:?}");
+    assert!(its.iter().all(|&n| n <= 20), "{its:?}");
+}
