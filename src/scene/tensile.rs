@@ -187,7 +187,8 @@ const FIRST_TRY_ITERATIONS: usize = 40;
 type Last = Option<(f64, Vec<Vec3>, Option<Vec<f64>>)>;
 
 /// An equilibrium with its solver report and linearisation.
-type Solved = Result<(Vec<Vec3>, SolveReport, Option<crate::solve::Linearization>), SceneError>;
+type Equilibrium = (Vec<Vec3>, SolveReport, Option<crate::solve::Linearization>);
+type Solved = Result<Equilibrium, SceneError>;
 
 /// The parameters (law, then thickness) of an equilibrium and ∂q/∂k there, one row per
 /// parameter.
@@ -473,17 +474,20 @@ impl StripRig {
     }
 
     /// The equilibrium at `dl` from the predictor (Euler or quadratic, whichever starts at the
-    /// lower energy). Outside a fitter's trial (`retry_iterations`
-    /// unset) the first attempt gets at most [`FIRST_TRY_ITERATIONS`]; where that fails, the
-    /// step from the last equilibrium is cut into 2, 4, then 8 equal sub-steps, each predicted
-    /// from the one before and held to the same limit; where they fail too, the predictor is
-    /// solved again with the whole budget (`max_iterations`: the backward-Euler fallback's time
-    /// to settle a wrinkling strip). A large step into a wrinkling strip can land where Newton
-    /// stagnates (measured: cotton at 45° on a graded 8 × 12 cage, 4 → 6 mm in one step,
-    /// relative residual stuck at 1; two sub-steps solve it); stiff yarns over a soft shear at
-    /// 22.5° crawl by backward Euler from a one-step start that two sub-steps solve in five
-    /// Newton iterations each (measured: the yarn-to-shear ratio 1000 strip, 16 × 24, 6 → 7.5
-    /// mm: 60 iterations of crawl first, when the budget was spent before the sub-steps).
+    /// lower energy). Outside a fitter's trial (`retry_iterations` unset) the cheap attempts
+    /// come first, each held to [`FIRST_TRY_ITERATIONS`]: the predictor, then the step from
+    /// the last equilibrium cut into 2, 4 and 8 equal sub-steps, each predicted from the one
+    /// before. Where they all fail, the whole budget (`max_iterations`: the backward-Euler
+    /// fallback's time to settle a wrinkling strip) goes to the predictor, then to the other
+    /// predictor, then to the sub-steps. A large step into a wrinkling strip can land where
+    /// Newton stagnates (measured: cotton at 45° on a graded 8 × 12 cage, 4 → 6 mm in one
+    /// step, relative residual stuck at 1; two sub-steps solve it); stiff yarns over a soft
+    /// shear at 22.5° crawl by backward Euler from a one-step start that two sub-steps solve
+    /// in five Newton iterations each (measured: the yarn-to-shear ratio 1000 strip, 16 × 24,
+    /// 6 → 7.5 mm: 60 iterations of crawl first, when the budget was spent before the
+    /// sub-steps); and at a yarn-to-shear ratio of 2e4 the 67.5° strip on 32 × 48 settles
+    /// within the budget from the quadratic start where it does not from Euler's, whose
+    /// energy was 1 % lower (5.625 mm: relative residual 7.7e-4 after 500 iterations).
     fn solve_cold(
         &mut self,
         previous: &Last,
@@ -495,47 +499,62 @@ impl StripRig {
         // assemblies): on stiff yarns the path bends too sharply for it (the ratio-1000 strip at
         // 22.5°, 6 → 7.5 mm: 50 iterations from it, 8 from Euler), while on the bundled
         // fabrics it is kept (cotton's 1918 iterations unchanged, silk 2534 → 2477)
-        let mut x0 = self.predict(previous, before, dl);
+        let mut starts = vec![self.predict(previous, before, dl)];
         if before.is_some() {
             let euler = self.predict(previous, None, dl);
-            if self.start_energy(dl, &euler) < self.start_energy(dl, &x0) {
-                x0 = euler;
+            if self.start_energy(dl, &euler) < self.start_energy(dl, &starts[0]) {
+                starts.insert(0, euler);
+            } else {
+                starts.push(euler);
             }
         }
         if self.retry_iterations.is_some() {
-            return self.solve_at(dl, x0, max_iterations);
+            return self.solve_at(dl, starts.swap_remove(0), max_iterations);
         }
         let limit = max_iterations.min(FIRST_TRY_ITERATIONS);
-        let first = self.solve_at(dl, x0.clone(), limit);
+        let first = self.solve_at(dl, starts[0].clone(), limit);
         if first.is_ok() {
             return first;
         }
+        if let Some(s) = self.sub_steps(previous, dl, limit) {
+            return Ok(s);
+        }
+        if limit == max_iterations {
+            return first;
+        }
+        let mut last = first;
+        for x0 in starts {
+            last = self.solve_at(dl, x0, max_iterations);
+            if last.is_ok() {
+                return last;
+            }
+        }
+        self.sub_steps(previous, dl, max_iterations)
+            .map_or(last, Ok)
+    }
+
+    /// The equilibrium at `dl` reached from the last one in 2, 4, then 8 equal sub-steps, each
+    /// predicted from the one before and held to `limit` iterations (`None` where every
+    /// division fails).
+    fn sub_steps(&mut self, previous: &Last, dl: f64, limit: usize) -> Option<Equilibrium> {
         let start = previous.as_ref().map_or(0.0, |p| p.0);
         for n in [2, 4, 8] {
             let mut last = previous.clone();
-            let mut solved = None;
             for k in 1..=n {
                 let e = start + (dl - start) * k as f64 / n as f64;
                 let x0 = self.predict(&last, None, e);
                 let Ok((x, report, lin)) = self.solve_at(e, x0, limit) else {
                     break;
                 };
-                let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
-                last = Some((e, x.clone(), slope));
                 if k == n {
-                    solved = Some((x, report, lin));
-                } else {
-                    self.spent += report.iterations;
+                    return Some((x, report, lin));
                 }
-            }
-            if let Some(s) = solved {
-                return Ok(s);
+                self.spent += report.iterations;
+                let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
+                last = Some((e, x, slope));
             }
         }
-        if limit < max_iterations {
-            return self.solve_at(dl, x0, max_iterations);
-        }
-        first
+        None
     }
 
     /// ∂q/∂(elongation) at an equilibrium: with x = T q + x̄ and the jaw's motion u = ∂x̄/∂(dl)
