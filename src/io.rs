@@ -6,6 +6,12 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// `s` as a TOML basic string. Rust's `{:?}` is not one: it writes `\u{302}` for a combining
+/// mark (a decomposed "é" in a file name, a "F̂" in a note), which TOML readers refuse.
+pub fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
 /// The temporary file next to `path` that [`write_atomic`] writes first.
 fn temporary_for(path: &Path) -> PathBuf {
     let name = path

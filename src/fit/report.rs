@@ -8,8 +8,10 @@ use crate::io::num;
 use crate::material::material_toml;
 use std::fmt::Write;
 
+/// A TOML basic string ([`crate::io::toml_string`]; the `{:?}` used here before made a fit file
+/// with a combining mark in a note or a file name unreadable).
 fn toml_str(s: &str) -> String {
-    format!("{s:?}")
+    crate::io::toml_string(s)
 }
 
 /// The material file followed by the `[fit]` table; loadable by every command that reads
@@ -38,6 +40,16 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         s,
         "shear_coupling = {}    # the tension–shear coupling (--shear-coupling): off, not tried, not kept or kept",
         toml_str(r.shear_coupling.name())
+    );
+    let _ = writeln!(
+        s,
+        "objective = {}    # the misfit each point added squared (--objective; auto as decided): relative (F̂ − F)/F or log ln(F̂/F)",
+        toml_str(r.objective.name())
+    );
+    let _ = writeln!(
+        s,
+        "joint = {}    # the warp and weft stages refitted over the off-axis strips too (--joint; auto as decided)",
+        r.joint
     );
     if let crate::fit::coupling::CouplingOutcome::Kept { without, with }
     | crate::fit::coupling::CouplingOutcome::Rejected { without, with, .. } = &r.shear_coupling
@@ -538,7 +550,22 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
 
 #[cfg(test)]
 mod tests {
-    use super::tick;
+    use super::{tick, toml_str};
+
+    /// Notes and file names with combining marks, quotes, backslashes and control characters
+    /// read back as written.
+    #[test]
+    fn strings_are_toml_whatever_they_hold() {
+        for text in [
+            "ln(F\u{302}/F)",
+            "tisse\u{301}.csv",
+            "a \"b\" \\ c\td\n",
+            "τ·ν₁₂",
+        ] {
+            let doc: toml::Table = format!("k = {}", toml_str(text)).parse().unwrap();
+            assert_eq!(doc["k"].as_str(), Some(text));
+        }
+    }
 
     #[test]
     fn tick_labels_have_no_float_noise() {

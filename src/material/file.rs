@@ -463,7 +463,7 @@ pub fn material_toml(m: &FabricMaterial) -> String {
     use std::fmt::Write;
     let law = &m.law;
     let mut s = String::new();
-    let _ = writeln!(s, "name = {:?}", m.name);
+    let _ = writeln!(s, "name = {}", crate::io::toml_string(&m.name));
     let _ = writeln!(s, "areal_density_g_m2 = {:?}", m.areal_density * 1e3);
     let _ = writeln!(s, "thickness_mm = {:?}", m.thickness * 1e3);
     let _ = writeln!(s, "a11_pa = {:?}    # warp", law.a11);

@@ -466,12 +466,12 @@ fn write_outputs(
     );
     let c = d.counts();
     let mut toml = format!(
-        "# written by ks-fit scene {name}\nscene = \"{name}\"\nmaterial = {material:?}\nmodel = {model:?}\nmesh = \"{m}x{m}\"\nmesh_choice = {why:?}\nqoi = {qoi_name:?}\nqoi_value = {qoi}\n",
+        "# written by ks-fit scene {name}\nscene = \"{name}\"\nmaterial = {material}\nmodel = {model}\nmesh = \"{m}x{m}\"\nmesh_choice = {why}\nqoi = {qoi_name}\nqoi_value = {qoi}\n",
         name = scene.name(),
-        material = scene.args().material.display().to_string(),
-        model = scene.args().model,
-        why = choice.why,
-        qoi_name = scene.qoi_name(),
+        material = kshell::io::toml_string(&scene.args().material.display().to_string()),
+        model = kshell::io::toml_string(&scene.args().model),
+        why = kshell::io::toml_string(&choice.why),
+        qoi_name = kshell::io::toml_string(scene.qoi_name()),
         qoi = run.qoi,
     );
     match choice.est_error {
