@@ -176,7 +176,7 @@ impl Fitter<'_> {
         };
         self.screened = None;
         let screen = (mode == CouplingMode::Auto).then_some((without.shape, without.rms));
-        let run = self.shell_stage(coupled, strips, level, true, false, screen);
+        let run = self.shell_stage(coupled, strips, level, true, super::StageMode::Full, screen);
         let gain = self.opts.degree_gain;
         let outcome = match run {
             Ok(Some((shape, r))) => {

@@ -356,6 +356,8 @@ mod tests {
             shapes_fitted: false,
             yarn_rule: crate::assembly::YarnRule::Full,
             shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
+            objective: crate::fit::Misfit::Relative,
+            joint: false,
         };
         let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
         let fig = Figure {

@@ -6,20 +6,24 @@
 
 use super::map::StageMap;
 use super::mesh_check::{order, MeshCheck};
-use super::{FitError, Fitter};
+use super::{FitError, Fitter, StageMode, StageSets};
 
 /// A stage whose determined quantities the last refinement moved by less than this is
 /// not refitted on the finer level (a tenth of the mesh check's 1 %).
 const STAGE_UNCHANGED: f64 = 1e-3;
 
-/// The shell model, coarse to fine; returns the meshes fitted on.
+/// The shell model, coarse to fine; returns the meshes fitted on. With the joint sweep
+/// ([`super::Joint`]) the first level's staged fit is followed by the yarn stiffnesses over
+/// their joint strips and the shear stage again; later levels refit each yarn stage's
+/// stiffness over its joint strips after the stage itself.
 pub(super) fn ladder(
     f: &mut Fitter,
     maps: &mut [StageMap],
-    strips: &[Vec<usize>],
+    sets: &StageSets,
     shear_candidates: &[Vec<f64>],
 ) -> Result<Vec<(usize, usize)>, FitError> {
     let opts = f.opts;
+    let strips = &sets.own[..];
     let all: Vec<usize> = strips.iter().flatten().copied().collect();
     let mut meshes = Vec::new();
     let mut previous: Option<Vec<f64>> = None;
@@ -108,12 +112,19 @@ pub(super) fn ladder(
                     continue;
                 }
             }
+            if li > 0 && k < 2 && sets.joint.as_ref().is_some_and(|j| !j[k].is_empty()) {
+                // with the joint sweep a finer level refits the yarn stiffness over the joint
+                // strips; η's shape stays the first level's (the mesh check measures it)
+                f.joint_stiffness(maps[k], k, sets, level)?;
+                f.keep_rising(maps[k].dir);
+                continue;
+            }
             let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
                 // the homogeneous strip models a clamped bias strip poorly: choose the shear
                 // degree on the shell model itself
                 f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
             } else {
-                f.shell_stage(maps[k], &strips[k], level, li == 0, false, None)?
+                f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
                     .expect("a stage that raises no degree always runs")
             };
             if k == 2 && li == 0 {
@@ -143,6 +154,16 @@ pub(super) fn ladder(
                 f.say(&msg);
             }
             f.keep_rising(maps[k].dir);
+        }
+        if li == 0 && sets.joint.is_some() {
+            // the joint sweep: each yarn stiffness over the strips it moves, then the shear
+            // given them
+            f.joint_stiffness(maps[0], 0, sets, level)?;
+            f.joint_stiffness(maps[1], 1, sets, level)?;
+            if !strips[2].is_empty() {
+                f.say("bias stage again, given the joint yarn stiffnesses");
+                f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
+            }
         }
         let data = f.data;
         if f.own_bending {

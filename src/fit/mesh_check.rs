@@ -522,7 +522,7 @@ impl Fitter<'_> {
                 let w = 1.0 / (points.len() as f64).sqrt();
                 for ((m, fa), fb) in points.iter().zip(&a).zip(&b) {
                     // a point excluded on either mesh (a saddle) has no defect to carry
-                    let d = w * (fb - fa) / m.1;
+                    let d = w * self.prep.misfit.change(*fa, *fb, m.1);
                     dr.push(if d.is_finite() { d } else { 0.0 });
                 }
                 let test = self.prep.curves[c].test;

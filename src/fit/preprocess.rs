@@ -78,6 +78,8 @@ pub struct Prepared {
     pub curves: Vec<Curve>,
     pub strips: Vec<Strip>,
     pub notes: Vec<String>,
+    /// how a point's misfit enters every tensile stage's objective
+    pub misfit: super::Misfit,
 }
 
 /// Least-squares residual of a cubic in (e − s)₊ without a constant (points with e ≤ s
@@ -300,6 +302,7 @@ pub fn prepare(
         curves,
         strips,
         notes,
+        misfit: Default::default(),
     })
 }
 

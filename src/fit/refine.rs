@@ -23,7 +23,7 @@
 use super::map::StageMap;
 use super::mesh_check::MeshCheck;
 use super::rigs::strip_mesh;
-use super::{mean_abs_finite, FitError, Fitter};
+use super::{mean_abs_finite, FitError, Fitter, StageMode};
 use std::time::Instant;
 
 /// Each test's mesh (`fit --test-meshes`).
@@ -137,7 +137,7 @@ impl Fitter<'_> {
 pub(super) fn refine_tests(
     f: &mut Fitter,
     maps: &[StageMap],
-    stages: &[Vec<usize>],
+    sets: &super::StageSets,
     last: (usize, usize),
 ) -> Result<bool, FitError> {
     let mut any = false;
@@ -161,7 +161,7 @@ pub(super) fn refine_tests(
             return Ok(any);
         }
         any = true;
-        double_and_refit(f, maps, stages, last, &todo)?;
+        double_and_refit(f, maps, sets, last, &todo)?;
     }
 }
 
@@ -174,13 +174,13 @@ pub(super) fn refine_tests(
 pub(super) fn refine_for_check(
     f: &mut Fitter,
     maps: &[StageMap],
-    stages: &[Vec<usize>],
+    sets: &super::StageSets,
     last: (usize, usize),
     check: &MeshCheck,
 ) -> Result<bool, FitError> {
     let checks = f.strip_checks(last)?;
     let mut todo: Vec<(usize, String)> = Vec::new();
-    for (k, strips) in stages.iter().enumerate() {
+    for (k, strips) in sets.own.iter().enumerate() {
         // a stage that moves: its strip with the largest estimated mesh error, alone (one
         // strip usually carries the change: the 45° one for the shear; the check then says
         // whether the next is needed)
@@ -229,7 +229,7 @@ pub(super) fn refine_for_check(
         f.notes.push(note);
         f.bend_refine += 1;
     }
-    double_and_refit(f, maps, stages, last, &todo)?;
+    double_and_refit(f, maps, sets, last, &todo)?;
     Ok(true)
 }
 
@@ -239,7 +239,7 @@ pub(super) fn refine_for_check(
 fn double_and_refit(
     f: &mut Fitter,
     maps: &[StageMap],
-    stages: &[Vec<usize>],
+    sets: &super::StageSets,
     last: (usize, usize),
     todo: &[(usize, String)],
 ) -> Result<(), FitError> {
@@ -256,6 +256,7 @@ fn double_and_refit(
         f.notes.push(note);
         f.prep.strips[*s].refine += 1;
     }
+    let stages = &sets.own;
     let first = (0..stages.len())
         .find(|&k| stages[k].iter().any(|s| todo.iter().any(|t| t.0 == *s)))
         .unwrap_or(stages.len());
@@ -267,7 +268,10 @@ fn double_and_refit(
             "{} stage refitted on its strips' own meshes",
             maps[k].dir.name()
         ));
-        f.shell_stage(maps[k], &stages[k], last, false, false, None)?;
+        f.shell_stage(maps[k], &stages[k], last, false, StageMode::Full, None)?;
+        // a yarn stage's joint stiffness follows it (an off-axis strip refined alone leaves
+        // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
+        f.joint_stiffness(maps[k], k, sets, last)?;
     }
     let data = f.data;
     if f.own_bending {

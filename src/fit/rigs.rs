@@ -265,9 +265,10 @@ impl Fitter<'_> {
     }
 }
 
-/// Residuals r = w (F̂ − F)/F of a curve, w = 1/√n so that every curve counts alike, and their
-/// rows of ∂r/∂p from the nodes' ∂F/∂p.
+/// Residuals r = w m(F̂, F) of a curve (m the [`super::Misfit`]: (F̂ − F)/F or ln(F̂/F)), w =
+/// 1/√n so that every curve counts alike, and their rows of ∂r/∂p from the nodes' ∂F/∂p.
 pub(super) fn curve_residuals(
+    misfit: super::Misfit,
     points: &[(f64, f64)],
     nodes: &[f64],
     node_forces: &[f64],
@@ -281,16 +282,21 @@ pub(super) fn curve_residuals(
         let model: f64 = weights.iter().map(|&(k, a)| a * node_forces[k]).sum();
         // a point interpolated from a saddle is excluded: no residual, no gradient
         let excluded = !model.is_finite();
-        out_r.push(if excluded { 0.0 } else { w * (model - f) / f });
+        out_r.push(if excluded {
+            0.0
+        } else {
+            w * misfit.of(model, f)
+        });
         if let Some(d) = node_dp {
             let mut row = vec![0.0; d.first().map_or(0, |r| r.len())];
             if excluded {
                 out_j.push(row);
                 continue;
             }
+            let slope = w * misfit.slope(model, f);
             for &(k, a) in &weights {
                 for (r, v) in row.iter_mut().zip(&d[k]) {
-                    *r += w * a * v / f;
+                    *r += slope * a * v;
                 }
             }
             out_j.push(row);
@@ -312,7 +318,15 @@ mod tests {
         let points: Vec<(f64, f64)> = [1.5, 2.5, 6.5, 7.5].iter().map(|&e| (e, 2.2 * e)).collect();
         let run = |forces: &[f64]| {
             let (mut r, mut j) = (Vec::new(), Vec::new());
-            curve_residuals(&points, &nodes, forces, Some(&dp), &mut r, &mut j);
+            curve_residuals(
+                super::super::Misfit::Relative,
+                &points,
+                &nodes,
+                forces,
+                Some(&dp),
+                &mut r,
+                &mut j,
+            );
             (r, j)
         };
         let (r, j) = run(&forces);

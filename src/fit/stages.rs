@@ -12,6 +12,19 @@ use crate::scene::SceneError;
 use rayon::prelude::*;
 use std::time::Instant;
 
+/// What a tensile stage fits ([`Fitter::shell_stage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum StageMode {
+    /// every variable of the stage's map
+    Full,
+    /// every variable, a degree just raised: given up when its space-mapped start finds no
+    /// better law
+    Raise,
+    /// the stiffness c alone, η's shape held (the joint sweep's yarn stages, see
+    /// [`super::Joint`]); a known stiffness leaves nothing to fit
+    Stiffness,
+}
+
 impl Fitter<'_> {
     /// Bootstrap fit of one direction from a start p on the homogeneous strip over the
     /// stage's curves; returns (p, mean relative error, shape error).
@@ -128,6 +141,30 @@ impl Fitter<'_> {
         (chosen.0, all)
     }
 
+    /// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
+    /// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
+    /// shear, or for a known stiffness.
+    pub(super) fn joint_stiffness(
+        &mut self,
+        map: StageMap,
+        k: usize,
+        sets: &super::StageSets,
+        level: (usize, usize),
+    ) -> Result<(), FitError> {
+        let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
+            return Ok(());
+        };
+        if strips.is_empty() {
+            return Ok(());
+        }
+        self.say(&format!(
+            "{} stiffness again over every strip it moves (the joint sweep)",
+            map.dir.name()
+        ));
+        self.shell_stage(map, strips, level, false, StageMode::Stiffness, None)?;
+        Ok(())
+    }
+
     pub(super) fn log_degree(&mut self, line: String) {
         self.say(&line);
         self.degree_log.push(line);
@@ -147,9 +184,11 @@ impl Fitter<'_> {
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
-        raise: bool,
+        mode: StageMode,
         screen: Option<(f64, f64)>,
     ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
+        let raise = mode == StageMode::Raise;
+        let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         let t0 = Instant::now();
         let mut rigs = Vec::new();
         for &s in strips {
@@ -223,7 +262,15 @@ impl Fitter<'_> {
                 for &c in cs {
                     let nodes = &prep.strips[s].nodes;
                     let dp = jac.then_some(&d[..]);
-                    curve_residuals(&prep.curves[c].points, nodes, &forces, dp, &mut r, &mut j);
+                    curve_residuals(
+                        prep.misfit,
+                        &prep.curves[c].points,
+                        nodes,
+                        &forces,
+                        dp,
+                        &mut r,
+                        &mut j,
+                    );
                 }
             }
             evals += 1;
@@ -240,7 +287,9 @@ impl Fitter<'_> {
         let r0 = problem(&p, true).map_err(fail)?.residuals;
         let flat: Vec<usize> = curves.iter().flatten().copied().collect();
         let mut shell = |q: &[f64]| problem(q, false).ok().map(|e| e.residuals);
-        let m = mapped_start(prep, &base, tau, map, &flat, &mut p, r0, 8, &mut shell);
+        // the stiffness alone needs no start from the homogeneous strip: it is one variable
+        let rounds = if stiffness_only { 0 } else { 8 };
+        let m = mapped_start(prep, &base, tau, map, &flat, &mut p, r0, rounds, &mut shell);
         self.stats.bootstrap_evaluations += m.homogeneous_evaluations;
         let note = format!(
             "{}: degree {} on {}×{}: space-mapped start, objective {:.3e} -> {:.3e} ({} of {} proposals kept)",
@@ -258,7 +307,8 @@ impl Fitter<'_> {
         let screened_out = match screen {
             Some((shape0, rms0)) => {
                 let r = problem(&p, false).map_err(fail)?.residuals;
-                let shape = super::shape_error(&lens, &super::surrogate::unweight(&r, &lens));
+                let shape =
+                    super::shape_error(&lens, &super::surrogate::unweight(&r, &lens, prep.misfit));
                 let rms = (m.after / ncurves.max(1) as f64).sqrt();
                 let out = shape > shape0 && rms > self.opts.degree_gain * rms0;
                 if out {
@@ -279,8 +329,11 @@ impl Fitter<'_> {
             self.time_stage(map.dir.name(), t0);
             return Ok(None);
         }
-        self.degree_log.push(note);
-        if first_level && !map.c_known {
+        if !stiffness_only {
+            self.degree_log.push(note);
+        }
+        let mut stiffness_rep = None;
+        if (first_level || stiffness_only) && !map.c_known {
             // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
             // jaws stop the strip from shearing freely): first fit the stiffness c alone
             let rest = p[1..].to_vec();
@@ -291,7 +344,7 @@ impl Fitter<'_> {
                 rel_decrease: 1e-2,
                 ..opts
             };
-            minimize(&mut scale, &one, |q: &[f64], jac: bool| {
+            let rep = minimize(&mut scale, &one, |q: &[f64], jac: bool| {
                 let mut full = vec![q[0]];
                 full.extend(&rest);
                 let e = problem(&full, jac)?;
@@ -302,8 +355,14 @@ impl Fitter<'_> {
             })
             .map_err(fail)?;
             p[0] = scale[0];
+            if stiffness_only {
+                stiffness_rep = Some(rep);
+            }
         }
-        let mut rep = minimize(&mut p, &opts, &mut problem).map_err(fail)?;
+        let mut rep = match stiffness_rep {
+            Some(rep) => rep,
+            None => minimize(&mut p, &opts, &mut problem).map_err(fail)?,
+        };
         // a term too small to matter is dropped, and the optimum re-evaluated without it
         let mut law = base.clone();
         map.decode(&p, &mut law);
@@ -325,7 +384,10 @@ impl Fitter<'_> {
             .rev()
             .find(|(q, _, _)| *q == p)
             .map_or(err, |(_, r, _)| {
-                super::shape_error(&lens, &super::surrogate::unweight(r, &lens))
+                super::shape_error(
+                    &lens,
+                    &super::surrogate::unweight(r, &lens, self.prep.misfit),
+                )
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&seen, &p) {
@@ -431,7 +493,12 @@ impl Fitter<'_> {
                 }
                 None => map.decode(cand, &mut self.law),
             }
-            let run = self.shell_stage(map, strips, level, true, best.is_some(), None);
+            let mode = if best.is_some() {
+                StageMode::Raise
+            } else {
+                StageMode::Full
+            };
+            let run = self.shell_stage(map, strips, level, true, mode, None);
             let (err, range) = match run {
                 Ok(Some(r)) => r,
                 Ok(None) => {

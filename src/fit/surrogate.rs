@@ -97,10 +97,11 @@ pub(super) fn homogeneous_fit(
             for (m, h) in curve.points.iter().zip(&pts) {
                 let g = ratio.map_or(1.0, |r| r[k]);
                 k += 1;
-                r.push(w * (g * h.force - m.1) / m.1);
+                r.push(w * prep.misfit.of(g * h.force, m.1));
                 if jac {
                     let d = map.chain(q, &law, &h.dforce);
-                    j.push(d.iter().map(|v| w * g * v / m.1).collect());
+                    let slope = w * g * prep.misfit.slope(g * h.force, m.1);
+                    j.push(d.iter().map(|v| slope * v).collect());
                 }
             }
         }
@@ -117,7 +118,7 @@ pub(super) fn homogeneous_fit(
         .iter()
         .map(|&c| prep.curves[c].points.len())
         .collect();
-    let rel = unweight(&r, &lens);
+    let rel = unweight(&r, &lens, prep.misfit);
     let error = super::mean_abs(&rel);
     let shape = super::shape_error(&lens, &rel);
     (error.is_finite() && shape.is_finite()).then_some(HomogeneousFit {
@@ -128,13 +129,13 @@ pub(super) fn homogeneous_fit(
     })
 }
 
-/// Relative errors from residuals weighted by 1/√(points) curve by curve.
-pub(super) fn unweight(r: &[f64], lens: &[usize]) -> Vec<f64> {
+/// Relative errors from `misfit`'s residuals weighted by 1/√(points) curve by curve.
+pub(super) fn unweight(r: &[f64], lens: &[usize], misfit: super::Misfit) -> Vec<f64> {
     let mut rel = Vec::with_capacity(r.len());
     let mut k = 0;
     for &n in lens {
         let w = 1.0 / (n as f64).sqrt();
-        rel.extend(r[k..k + n].iter().map(|v| v / w));
+        rel.extend(r[k..k + n].iter().map(|v| misfit.relative(v / w)));
         k += n;
     }
     rel
@@ -207,7 +208,7 @@ pub(super) fn mapped_start(
             break;
         };
         // s(p_k) / h(p_k), point by point (1 where either is unusable, e.g. a saddle)
-        let rel = unweight(&r, &lens);
+        let rel = unweight(&r, &lens, prep.misfit);
         let ratio: Vec<f64> = rel
             .iter()
             .zip(&measured)
@@ -258,8 +259,9 @@ pub(super) fn mapped_start(
 mod tests {
     use super::*;
     use crate::dataset::Role;
-    use crate::fit::map::{A12Rule, Direction};
+    use crate::fit::map::{var_to_beta, A12Rule, Direction};
     use crate::fit::preprocess::{Curve, Strip};
+    use crate::fit::Misfit;
     use crate::material::{Cutoffs, Eta};
 
     fn law() -> Orthotropic {
@@ -302,6 +304,7 @@ mod tests {
                 refine: 0,
             }],
             notes: Vec::new(),
+            misfit: Default::default(),
         };
         let h = homogeneous_forces(&prep, &law(), 2e-4, map, &[0], truth).unwrap();
         for (p, f) in prep.curves[0].points.iter_mut().zip(h) {
@@ -357,6 +360,76 @@ mod tests {
             again.after <= again.before && again.after < 1e-14,
             "{again:?}"
         );
+    }
+
+    /// Three repeats of one curve at force scales s = 0.7, 1.0, 1.3 of the law that made them,
+    /// fitted by the stiffness alone (a 90° strip, a12 = 0: the force is a11 times a fixed
+    /// curve). The best scale c of the model has closed forms: Σ(1/s)/Σ(1/s²) = 0.919 under
+    /// the relative misfit (the weakest repeat weighs most) and the geometric mean
+    /// (0.7·1.0·1.3)^(1/3) = 0.969 under the log misfit (see `measures::Objective`).
+    #[test]
+    fn the_log_misfit_takes_the_geometric_mean_of_scattered_repeats() {
+        let map = StageMap {
+            dir: Direction::Warp,
+            xhat: 0.05f64.powi(2),
+            c_known: false,
+            a12: A12Rule::Fixed(0.0),
+            coupling: false,
+        };
+        let scales = [0.7, 1.0, 1.3];
+        let mut base = law();
+        base.a12 = 0.0;
+        let truth = vec![2.0e8f64.ln(), beta_var(1.5)];
+        let elong: Vec<f64> = (1..=8).map(|k| 0.5e-3 * k as f64).collect();
+        let curve = |k: usize| Curve {
+            test: k,
+            angle_deg: 90.0,
+            role: Role::Fit,
+            repeat: k + 1,
+            used_in_fit: true,
+            toe: 0.0,
+            toe_auto: false,
+            points: elong.iter().map(|&e| (e, 1.0)).collect(),
+            dropped: 0,
+            strip: 0,
+        };
+        let mut prep = Prepared {
+            curves: (0..3).map(curve).collect(),
+            strips: vec![Strip {
+                angle_deg: 90.0,
+                width: 0.05,
+                length: 0.075,
+                curves: vec![0, 1, 2],
+                nodes: elong.clone(),
+                refine: 0,
+            }],
+            notes: Vec::new(),
+            misfit: Default::default(),
+        };
+        let h = homogeneous_forces(&prep, &base, 2e-4, map, &[0], &truth).unwrap();
+        for (c, s) in prep.curves.iter_mut().zip(scales) {
+            for (p, f) in c.points.iter_mut().zip(&h) {
+                p.1 = s * f;
+            }
+        }
+        let inv: f64 = scales.iter().map(|s| 1.0 / s).sum();
+        let inv2: f64 = scales.iter().map(|s| 1.0 / (s * s)).sum();
+        let geometric = scales.iter().product::<f64>().cbrt();
+        for (misfit, want) in [(Misfit::Relative, inv / inv2), (Misfit::Log, geometric)] {
+            prep.misfit = misfit;
+            let start = vec![1.0e8f64.ln(), beta_var(0.5)];
+            let fit = homogeneous_fit(&prep, &base, 2e-4, map, &[0, 1, 2], start, None).unwrap();
+            let got = fit.p[0].exp() / 2.0e8;
+            assert!(
+                (got - want).abs() < 1e-6,
+                "{misfit:?}: {got} against {want}"
+            );
+            assert!(
+                (var_to_beta(fit.p[1]) - 1.5).abs() < 1e-6,
+                "{misfit:?}: {:?}",
+                fit.p
+            );
+        }
     }
 
     fn beta_var(beta: f64) -> f64 {

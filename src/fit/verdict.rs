@@ -210,6 +210,8 @@ mod tests {
             shapes_fitted: false,
             yarn_rule: crate::assembly::YarnRule::Full,
             shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
+            objective: crate::fit::Misfit::Relative,
+            joint: false,
         }
     }
 

@@ -280,6 +280,18 @@ enum Command {
         /// separable law) or on (kept whatever it gains, if convex).
         #[arg(long, value_enum, default_value = "auto")]
         shear_coupling: kshell::fit::coupling::CouplingMode,
+        /// Misfit of a point that the tensile stages sum the squares of: relative ((F̂ − F)/F,
+        /// the paper's), log (ln(F̂/F): symmetric in a repeat's force scale, so repeats that
+        /// scatter by a scale do not pull the law towards the weakest) or auto (log when an
+        /// angle has two or more fitted repeats, else relative). `[fit] objective` says which.
+        #[arg(long, value_enum, default_value = "auto")]
+        objective: kshell::fit::Objective,
+        /// The joint sweep: after the first mesh's staged fit, the warp and weft stages are
+        /// refitted over the off-axis strips too (which load the yarns), then the shear stage,
+        /// and finer meshes fit each stage over those strips: on, off (the paper's staged
+        /// fit) or auto (on unless --protocol paper).
+        #[arg(long, value_enum, default_value = "auto")]
+        joint: kshell::fit::Joint,
         /// Cloth model fitted: kl (the subdivision shell, everything above applies), or a
         /// triangle model (springs, soft-constraints, stvk-ds, xpbd), fitted in Miguel et al.
         /// 2012's staged order on 16-faces-wide strips (default output
@@ -492,6 +504,8 @@ fn main() -> ExitCode {
             test_meshes,
             yarn_rule,
             shear_coupling,
+            objective,
+            joint,
             model: _,
         } => fit_options(
             degree.map_or(max_degree, |d| d.max(1)),
@@ -513,6 +527,8 @@ fn main() -> ExitCode {
             test_meshes,
             yarn_rule,
             shear_coupling,
+            objective,
+            joint,
             ..opts
         })
         .and_then(|opts| {
