@@ -214,3 +214,14 @@ pub struct SolveReport {
 pub(crate) fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
+
+/// Makes every sparse factorisation sequential (faer's own parallelism off), so that a result
+/// does not depend on the number of threads: faer's supernodal Cholesky splits its dense
+/// updates by the rayon pool's size, and on the 32 × 48 strips a fit refines to, one thread and
+/// two gave fitted parameters differing in the 13th digit (`ks-fit batch --jobs 2` runs each fit
+/// on one thread). The fit's independent solves run side by side instead, and on 2 cores
+/// `Par::rayon(2)` was slower than sequential factorisation anyway (measured on an n = 30k
+/// shell-like system). `ks-fit` calls this first; a library user who wants the same should too.
+pub fn deterministic_factorizations() {
+    faer::set_global_parallelism(faer::Par::Seq);
+}

@@ -402,6 +402,7 @@ fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    kshell::solve::deterministic_factorizations();
     let force = cli.force;
     kshell::limits::set_max_faces(cli.max_faces);
     let draws = matches!(

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 /// Manifest columns passed to `ks-fit fit` as `--name value` (underscores become hyphens).
-pub const FIT_COLUMNS: [&str; 16] = [
+pub const FIT_COLUMNS: [&str; 20] = [
     "model",
     "max_degree",
     "degree",
@@ -23,6 +23,10 @@ pub const FIT_COLUMNS: [&str; 16] = [
     "mesh_check",
     "grading",
     "test_meshes",
+    "yarn_rule",
+    "shear_coupling",
+    "objective",
+    "joint",
 ];
 
 /// Largest manifest read, bytes (a library of a million fabrics is well under it).
