@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{folder, ks_fit, s};
+use common::{folder, ks_fit, s, tensile_error_at as error_at};
 
 const TRUE_A11: f64 = 3.0e7;
 
@@ -24,28 +24,35 @@ a22_pa = 2.0e7
 g12_pa = 1.0e6
 ";
 
-/// `ks-fit synth` into `dir/data` on graded 16 × 24 cages to 5 % strain, one repeat per angle;
-/// then the warp curve's forces times 0.8.
-fn synth_weak_warp(dir: &std::path::Path) -> std::path::PathBuf {
+/// `ks-fit synth` of [`MATERIAL`] into `dir/data` with `extra` options; its fabric.toml.
+fn synth(dir: &std::path::Path, extra: &[&str]) -> std::path::PathBuf {
     let m = dir.join("material.toml");
     std::fs::write(&m, MATERIAL).unwrap();
     let data = dir.join("data");
-    let (rc, out, err) = ks_fit(&[
-        "synth",
-        "--material",
-        s(&m),
-        "--out",
-        s(&data),
-        "--points",
-        "6",
-        "--mesh",
-        "16x24",
-        "--grading",
-        "0.8,0.8",
-        "--max-strain",
-        "0.05",
-    ]);
+    let mut args = vec!["synth", "--material", s(&m), "--out", s(&data)];
+    args.extend_from_slice(extra);
+    let (rc, out, err) = ks_fit(&args);
     assert_eq!(rc, 0, "{out}{err}");
+    data.join("fabric.toml")
+}
+
+/// [`synth`] on graded 16 × 24 cages to 5 % strain, one repeat per angle; then the warp curve's
+/// forces times 0.8.
+fn synth_weak_warp(dir: &std::path::Path) -> std::path::PathBuf {
+    let fabric = synth(
+        dir,
+        &[
+            "--points",
+            "6",
+            "--mesh",
+            "16x24",
+            "--grading",
+            "0.8,0.8",
+            "--max-strain",
+            "0.05",
+        ],
+    );
+    let data = fabric.parent().unwrap();
     let warp = data.join("warp-1.csv");
     let text = std::fs::read_to_string(&warp).unwrap();
     let mut scaled = String::new();
@@ -60,7 +67,7 @@ fn synth_weak_warp(dir: &std::path::Path) -> std::path::PathBuf {
         scaled.push('\n');
     }
     std::fs::write(&warp, scaled).unwrap();
-    data.join("fabric.toml")
+    fabric
 }
 
 /// The fitted material (degree 1, the 8 × 12 level only, no coupling) with `extra` options.
@@ -84,18 +91,6 @@ fn fit(fabric: &std::path::Path, tag: &str, extra: &[&str]) -> toml::Table {
     let (rc, out, err) = ks_fit(&args);
     assert!(rc == 0 || rc == 3, "{out}{err}");
     std::fs::read_to_string(&out_file).unwrap().parse().unwrap()
-}
-
-/// avg_rel_error of the fitted tensile test at `angle`.
-fn error_at(doc: &toml::Table, angle: f64) -> f64 {
-    doc["fit"]["test"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|t| t.as_table().unwrap())
-        .find(|t| t["kind"].as_str() == Some("tensile") && t["angle_deg"].as_float() == Some(angle))
-        .and_then(|t| t["avg_rel_error"].as_float())
-        .unwrap_or_else(|| panic!("no tensile test at {angle}°"))
 }
 
 #[test]
@@ -145,28 +140,21 @@ fn the_joint_sweep_lets_the_off_axis_strips_correct_a_weak_warp_sample() {
 #[test]
 fn repeats_make_auto_take_the_log_misfit() {
     let dir = folder("objective");
-    let m = dir.join("material.toml");
-    std::fs::write(&m, MATERIAL).unwrap();
-    let data = dir.join("data");
-    let (rc, out, err) = ks_fit(&[
-        "synth",
-        "--material",
-        s(&m),
-        "--out",
-        s(&data),
-        "--points",
-        "4",
-        "--mesh",
-        "8x12",
-        "--max-strain",
-        "0.03",
-        "--repeats",
-        "2",
-        "--noise",
-        "0.1",
-    ]);
-    assert_eq!(rc, 0, "{out}{err}");
-    let fabric = data.join("fabric.toml");
+    let fabric = synth(
+        &dir,
+        &[
+            "--points",
+            "4",
+            "--mesh",
+            "8x12",
+            "--max-strain",
+            "0.03",
+            "--repeats",
+            "2",
+            "--noise",
+            "0.1",
+        ],
+    );
     let quick = ["--joint", "off", "--mesh-check", "off"];
     let auto = fit(&fabric, "auto", &quick);
     assert_eq!(auto["fit"]["objective"].as_str(), Some("log"));

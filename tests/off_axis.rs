@@ -13,7 +13,7 @@
 
 mod common;
 
-use common::{folder, ks_fit, s};
+use common::{folder, ks_fit, s, tensile_error_at as error_at};
 
 const PLAIN: &str = "name = \"plain\"
 areal_density_g_m2 = 150.0
@@ -71,18 +71,6 @@ fn fit(fabric: &std::path::Path, mode: &str) -> (toml::Table, String) {
     assert!(rc == 0 || rc == 3, "{out}{err}");
     let doc = std::fs::read_to_string(&out_file).unwrap().parse().unwrap();
     (doc, format!("{out}{err}"))
-}
-
-/// avg_rel_error of the fitted tensile test at `angle`.
-fn error_at(doc: &toml::Table, angle: f64) -> f64 {
-    doc["fit"]["test"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|t| t.as_table().unwrap())
-        .find(|t| t["kind"].as_str() == Some("tensile") && t["angle_deg"].as_float() == Some(angle))
-        .and_then(|t| t["avg_rel_error"].as_float())
-        .unwrap_or_else(|| panic!("no tensile test at {angle}°"))
 }
 
 const OFF_AXIS: [f64; 3] = [22.5, 45.0, 67.5];

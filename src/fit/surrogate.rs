@@ -278,34 +278,41 @@ mod tests {
         }
     }
 
-    /// One 45° strip, 50 × 75 mm, whose "measured" forces are `scale` times the homogeneous
-    /// strip's at the law `truth` (variables of a degree-2 shear).
-    fn setup(map: StageMap, truth: &[f64], scale: f64) -> Prepared {
+    /// One strip at `angle`, 50 × 75 mm, with `repeats` curves of 8 points to 4 mm (forces
+    /// to be filled in).
+    fn one_strip(angle: f64, repeats: usize) -> Prepared {
         let elong: Vec<f64> = (1..=8).map(|k| 0.5e-3 * k as f64).collect();
-        let mut prep = Prepared {
-            curves: vec![Curve {
-                test: 0,
-                angle_deg: 45.0,
-                role: Role::Fit,
-                repeat: 1,
-                used_in_fit: true,
-                toe: 0.0,
-                toe_auto: false,
-                points: elong.iter().map(|&e| (e, 1.0)).collect(),
-                dropped: 0,
-                strip: 0,
-            }],
+        let curve = |k: usize| Curve {
+            test: k,
+            angle_deg: angle,
+            role: Role::Fit,
+            repeat: k + 1,
+            used_in_fit: true,
+            toe: 0.0,
+            toe_auto: false,
+            points: elong.iter().map(|&e| (e, 1.0)).collect(),
+            dropped: 0,
+            strip: 0,
+        };
+        Prepared {
+            curves: (0..repeats).map(curve).collect(),
             strips: vec![Strip {
-                angle_deg: 45.0,
+                angle_deg: angle,
                 width: 0.05,
                 length: 0.075,
-                curves: vec![0],
-                nodes: elong.clone(),
+                curves: (0..repeats).collect(),
+                nodes: elong,
                 refine: 0,
             }],
             notes: Vec::new(),
             misfit: Default::default(),
-        };
+        }
+    }
+
+    /// One 45° strip, 50 × 75 mm, whose "measured" forces are `scale` times the homogeneous
+    /// strip's at the law `truth` (variables of a degree-2 shear).
+    fn setup(map: StageMap, truth: &[f64], scale: f64) -> Prepared {
+        let mut prep = one_strip(45.0, 1);
         let h = homogeneous_forces(&prep, &law(), 2e-4, map, &[0], truth).unwrap();
         for (p, f) in prep.curves[0].points.iter_mut().zip(h) {
             p.1 = scale * f;
@@ -380,32 +387,7 @@ mod tests {
         let mut base = law();
         base.a12 = 0.0;
         let truth = vec![2.0e8f64.ln(), beta_var(1.5)];
-        let elong: Vec<f64> = (1..=8).map(|k| 0.5e-3 * k as f64).collect();
-        let curve = |k: usize| Curve {
-            test: k,
-            angle_deg: 90.0,
-            role: Role::Fit,
-            repeat: k + 1,
-            used_in_fit: true,
-            toe: 0.0,
-            toe_auto: false,
-            points: elong.iter().map(|&e| (e, 1.0)).collect(),
-            dropped: 0,
-            strip: 0,
-        };
-        let mut prep = Prepared {
-            curves: (0..3).map(curve).collect(),
-            strips: vec![Strip {
-                angle_deg: 90.0,
-                width: 0.05,
-                length: 0.075,
-                curves: vec![0, 1, 2],
-                nodes: elong.clone(),
-                refine: 0,
-            }],
-            notes: Vec::new(),
-            misfit: Default::default(),
-        };
+        let mut prep = one_strip(90.0, 3);
         let h = homogeneous_forces(&prep, &base, 2e-4, map, &[0], &truth).unwrap();
         for (c, s) in prep.curves.iter_mut().zip(scales) {
             for (p, f) in c.points.iter_mut().zip(&h) {

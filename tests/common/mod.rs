@@ -172,3 +172,15 @@ pub fn made_lab(
         notes: Vec::new(),
     }
 }
+
+/// `avg_rel_error` of the first fitted tensile test at `angle` in a fitted material file.
+pub fn tensile_error_at(doc: &toml::Table, angle: f64) -> f64 {
+    doc["fit"]["test"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_table().unwrap())
+        .find(|t| t["kind"].as_str() == Some("tensile") && t["angle_deg"].as_float() == Some(angle))
+        .and_then(|t| t["avg_rel_error"].as_float())
+        .unwrap_or_else(|| panic!("no tensile test at {angle}°"))
+}
