@@ -41,6 +41,7 @@ mod bending;
 pub mod bootstrap;
 pub mod coupling;
 pub mod html;
+mod joint;
 mod ladder;
 pub mod map;
 mod measures;
@@ -53,6 +54,8 @@ pub mod report;
 mod rigs;
 pub mod shapes;
 mod stages;
+pub use joint::Joint;
+use joint::StageSets;
 use stages::StageMode;
 mod surrogate;
 mod thickness;
@@ -140,34 +143,6 @@ pub struct FitOptions {
     pub objective: Objective,
     /// Whether the yarn stages also see the off-axis strips ([`Joint`]).
     pub joint: Joint,
-}
-
-/// The joint sweep (`ks-fit fit --joint`). The staged fit (paper §5) takes the warp law from
-/// the warp strips alone and the weft law from the weft strips, then the shear from the
-/// off-axis strips with the yarns held. But an off-axis strip loads the yarns too (a 67.5°
-/// strip mostly the warp), so with repeats that scatter the off-axis strips inherit whatever
-/// scale the yarn repeats happened to have, and the shear stage cannot correct it: on the
-/// bundled denim the warp repeats lie at 0.62–1.15 of the law that made them, and the fitted
-/// 67.5° strip fell 35 % below all three of its repeats. The sweep refits the warp stage over
-/// the warp and every off-axis strip, the weft stage likewise, then the shear stage, once,
-/// after the first level's staged fit (block coordinate descent on the whole objective: each
-/// stage over every curve its parameters move), and every later level fits the stages over
-/// those strips.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
-pub enum Joint {
-    /// on, except under `--protocol paper` (the paper's staged fit, as published)
-    #[default]
-    Auto,
-    On,
-    Off,
-}
-
-/// The strips each stage fits: its own (warp 90°, weft 0°, shear every other angle) and, with
-/// the joint sweep, those each yarn stage's stiffness is refitted over (its own and every
-/// off-axis strip; none where the stiffness is known).
-pub(super) struct StageSets {
-    pub own: Vec<Vec<usize>>,
-    pub joint: Option<Vec<Vec<usize>>>,
 }
 
 impl Default for FitOptions {
@@ -626,34 +601,12 @@ pub fn fit(
     }
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
     f.decide_yarns();
-    let joint_on = match opts.joint {
-        Joint::On => true,
-        Joint::Off => false,
-        Joint::Auto => !opts.paper_protocol,
-    };
-    let joint: Option<Vec<Vec<usize>>> = (joint_on
-        && !strips[2].is_empty()
-        && (0..2).any(|k| !strips[k].is_empty() && !maps[k].c_known))
-    .then(|| {
-        (0..2)
-            .map(|k| {
-                if strips[k].is_empty() || maps[k].c_known {
-                    Vec::new()
-                } else {
-                    strips[k].iter().chain(&strips[2]).copied().collect()
-                }
-            })
-            .collect()
-    });
-    if joint.is_some() {
+    let sets = joint::stage_sets(opts, strips.clone(), &maps);
+    if sets.joint.is_some() {
         f.notes.push(
             "joint sweep (--joint): the warp and weft stiffnesses refitted over the off-axis strips too, then the shear, on every mesh".into(),
         );
     }
-    let sets = StageSets {
-        own: strips.clone(),
-        joint,
-    };
     let meshes = ladder::ladder(&mut f, &mut maps, &sets, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
     // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist

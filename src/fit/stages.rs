@@ -141,30 +141,6 @@ impl Fitter<'_> {
         (chosen.0, all)
     }
 
-    /// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
-    /// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
-    /// shear, or for a known stiffness.
-    pub(super) fn joint_stiffness(
-        &mut self,
-        map: StageMap,
-        k: usize,
-        sets: &super::StageSets,
-        level: (usize, usize),
-    ) -> Result<(), FitError> {
-        let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
-            return Ok(());
-        };
-        if strips.is_empty() {
-            return Ok(());
-        }
-        self.say(&format!(
-            "{} stiffness again over every strip it moves (the joint sweep)",
-            map.dir.name()
-        ));
-        self.shell_stage(map, strips, level, false, StageMode::Stiffness, None)?;
-        Ok(())
-    }
-
     pub(super) fn log_degree(&mut self, line: String) {
         self.say(&line);
         self.degree_log.push(line);
