@@ -1,12 +1,8 @@
 //! Writing a dataset back: `fabric.toml` (lab units) and its curves as `elongation_mm,force_n`.
 
 use super::{FabricDataset, Role, ShapeScene, TensileTest, CURVE_HEADER};
+use crate::io::toml_string;
 use std::path::Path;
-
-/// A TOML string literal.
-fn toml_string(s: &str) -> String {
-    toml::Value::String(s.to_string()).to_string()
-}
 
 /// The `fabric.toml` text of `data` (lab units), each line of `comment` as a `#` line on top.
 pub fn dataset_toml(data: &FabricDataset, comment: &str) -> String {
