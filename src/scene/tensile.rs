@@ -331,9 +331,16 @@ impl StripRig {
                 stage: "reaction".into(),
                 source: SolveError::StartOutOfDomain(e.to_string()),
             };
-            self.model
-                .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
-                .map_err(reaction_error)?;
+            // the reactions: the solver's own gradient at the solution where it hands one back
+            let grad = match &lin {
+                Some(l) => &l.gradient,
+                None => {
+                    self.model
+                        .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
+                        .map_err(reaction_error)?;
+                    &grad
+                }
+            };
             let force: f64 = self
                 .motion
                 .iter()

@@ -14,6 +14,10 @@ use faer::MatMut;
 /// Clyde et al. 2017, Eq. 6; constraints are eliminated, so no multipliers appear).
 pub struct Linearization {
     pub hessian: BlockMatrix,
+    /// ∂E/∂x over every DOF (free and clamped) at the solution: its reactions. Where the
+    /// solve's last step was polished ([`super::NewtonOptions::polish`]) this is the polished
+    /// point's, while the Hessian is the point's before it.
+    pub gradient: Vec<Vec3>,
     pub(super) values: Vec<f64>,
     pub(super) llt: Llt<usize, f64>,
 }
@@ -26,23 +30,24 @@ impl Linearization {
         system: &FreeSystem,
         x: &[Vec3],
     ) -> Result<Self, SolveError> {
-        let (hessian, values) = Self::assemble(model, system, x)?;
+        let (hessian, values, gradient) = Self::assemble(model, system, x)?;
         let llt = system.try_factor(&values)?.ok_or_else(|| {
             SolveError::Linear("the equilibrium's Hessian is not positive definite".into())
         })?;
         Ok(Self {
             hessian,
+            gradient,
             values,
             llt,
         })
     }
 
-    /// The full Hessian at `x` and the reduced K's values.
+    /// The full Hessian at `x`, the reduced K's values and the gradient.
     fn assemble(
         model: &dyn ClothModel,
         system: &FreeSystem,
         x: &[Vec3],
-    ) -> Result<(BlockMatrix, Vec<f64>), SolveError> {
+    ) -> Result<(BlockMatrix, Vec<f64>, Vec<Vec3>), SolveError> {
         let mut grad = vec![[0.0; 3]; model.num_nodes()];
         let mut hessian = BlockMatrix::zeros(model.pattern().clone());
         model
@@ -50,7 +55,7 @@ impl Linearization {
             .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
         let mut values = Vec::new();
         system.values(&hessian, &mut values);
-        Ok((hessian, values))
+        Ok((hessian, values, grad))
     }
 
     /// As [`Linearization::new`], but where K is not positive definite (an equilibrium that
@@ -63,7 +68,7 @@ impl Linearization {
         system: &FreeSystem,
         x: &[Vec3],
     ) -> Result<(Self, f64), SolveError> {
-        let (hessian, values) = Self::assemble(model, system, x)?;
+        let (hessian, values, gradient) = Self::assemble(model, system, x)?;
         for sigma in [0.0, 1e-10, 1e-8, 1e-6, 1e-4] {
             let mut shifted = values.clone();
             for &k in &system.diag {
@@ -73,6 +78,7 @@ impl Linearization {
                 return Ok((
                     Self {
                         hessian,
+                        gradient,
                         values: shifted,
                         llt,
                     },

@@ -72,6 +72,10 @@ pub struct NewtonOptions {
     /// defined, even uphill (non-monotone: the energy line search would cut the first
     /// membrane-stretching step of a heavy cantilever to nothing); 0: always line-searched.
     pub full_steps: usize,
+    /// A Newton step from a relative residual under √rtol is taken whole and checked by a
+    /// gradient assembly, without a further Hessian assembly and factorisation where it lands
+    /// within `rtol` (the tangent of the point before is kept as the linearisation).
+    pub polish: bool,
 }
 
 /// How [`continuation`] brings on a load, and how each solve is globalised.
@@ -145,6 +149,7 @@ impl Default for NewtonOptions {
             refine_steps: 4,
             strategy: Strategy::FullStep,
             full_steps: 0,
+            polish: true,
         }
     }
 }
@@ -156,6 +161,7 @@ impl NewtonOptions {
             fallback: false,
             refine_steps: 0,
             strategy: Strategy::Ramp,
+            polish: false,
             ..Self::default()
         }
     }
@@ -209,6 +215,11 @@ pub struct SolveReport {
     pub stable: bool,
     /// Times an unstable equilibrium (a saddle) was perturbed and the solve continued.
     pub saddle_escapes: usize,
+    /// The last Newton step was taken on the factorisation before it and checked by a
+    /// gradient assembly (see [`NewtonOptions::polish`]): the linearisation is that point's.
+    pub polished: bool,
+    /// Such last steps that missed `rtol` (each one gradient assembly spent; the solve went on).
+    pub polish_misses: usize,
 }
 
 pub(crate) fn norm(v: &[f64]) -> f64 {

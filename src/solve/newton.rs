@@ -175,6 +175,7 @@ pub(super) fn line_search(
             report.seconds = t0.elapsed().as_secs_f64();
             let lin = llt.map(|llt| Linearization {
                 hessian: hess,
+                gradient: grad,
                 values,
                 llt,
             });
@@ -194,9 +195,15 @@ pub(super) fn line_search(
             }
         }
         let tf = Instant::now();
+        // the factorisation is of the Hessian itself (Newton's, not shifted): a step on it may
+        // be the last one (see `polish`)
+        let mut own_hessian = false;
         let llt = match mode {
             Mode::Newton => match system.try_factor(&values)? {
-                Some(llt) => llt,
+                Some(llt) => {
+                    own_hessian = true;
+                    llt
+                }
                 None => {
                     report.factorizations += 1;
                     if !opts.fallback {
@@ -254,6 +261,35 @@ pub(super) fn line_search(
             report.refinement_steps += rep.steps;
         }
         report.factor_seconds += tf.elapsed().as_secs_f64();
+        if own_hessian && opts.polish && gnorm <= opts.rtol.sqrt() * scale {
+            if let Some(done) = polish(
+                model,
+                system,
+                x,
+                &d,
+                opts,
+                (&external, external_scale),
+                &values,
+            ) {
+                report.iterations = it + 1;
+                report.polished = true;
+                report.energy = done.energy;
+                report.residual = done.residual;
+                report.precision_limited = done.at_floor;
+                report.stable = true;
+                report.seconds = t0.elapsed().as_secs_f64();
+                return Ok((
+                    report,
+                    Some(Linearization {
+                        hessian: hess,
+                        gradient: done.gradient,
+                        values,
+                        llt,
+                    }),
+                ));
+            }
+            report.polish_misses += 1;
+        }
         let slope: f64 = d.iter().zip(&gf).map(|(a, b)| a * b).sum();
         let descent = slope < 0.0;
         // backtracking (Armijo) line search on the energy
@@ -343,6 +379,68 @@ pub(super) fn line_search(
         iterations: opts.max_iterations,
         residual: report.residual,
     })
+}
+
+/// The last step of a converging Newton solve, taken whole on the factorisation that computed
+/// it and checked by one gradient assembly instead of a further Hessian assembly and
+/// factorisation: from a relative residual r ≤ √rtol a Newton step leaves about r² (quadratic
+/// convergence), so the equilibrium usually needs no new tangent. Where the step lands within
+/// `rtol` (or the round-off floor, measured with the diagonal of the tangent it came from),
+/// `x` moves there and what it found there comes back; the caller keeps the tangent at the point before as the linearisation, which is first-order
+/// accurate in the step (sensitivities and predictors to about r). Otherwise `x` is left as
+/// it was and `None` comes back (one gradient assembly spent).
+fn polish(
+    model: &dyn ClothModel,
+    system: &FreeSystem,
+    x: &mut [Vec3],
+    d: &[f64],
+    opts: &NewtonOptions,
+    (external, external_scale): (&[Vec3], f64),
+    values: &[f64],
+) -> Option<Polished> {
+    let mut trial = x.to_vec();
+    system.step(&mut trial, d, 1.0);
+    let mut grad = vec![[0.0; 3]; model.num_nodes()];
+    let energy = model
+        .assemble(&trial, Want::Gradient, Some(&mut grad), None)
+        .ok()
+        .filter(|e| e.is_finite())?;
+    let mut gf = vec![0.0; system.num_free];
+    let b = balance(
+        system,
+        &trial,
+        &grad,
+        external,
+        external_scale,
+        values,
+        &mut gf,
+    );
+    let within = b.gnorm <= opts.rtol * b.scale;
+    if !(within || b.gnorm <= b.floor) {
+        return None;
+    }
+    x.copy_from_slice(&trial);
+    Some(Polished {
+        energy,
+        residual: if b.scale > 0.0 {
+            b.gnorm / b.scale
+        } else {
+            b.gnorm
+        },
+        at_floor: !within,
+        gradient: grad,
+    })
+}
+
+/// Where a polished step landed.
+struct Polished {
+    energy: f64,
+    /// relative residual
+    residual: f64,
+    /// within the round-off floor rather than `rtol`
+    at_floor: bool,
+    /// over every DOF
+    gradient: Vec<Vec3>,
 }
 
 /// The diagonal of the bounding box of `x`.

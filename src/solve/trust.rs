@@ -99,6 +99,7 @@ pub(super) fn trust_region(
             report.seconds = t0.elapsed().as_secs_f64();
             let lin = llt.map(|llt| Linearization {
                 hessian: hess,
+                gradient: grad,
                 values,
                 llt,
             });

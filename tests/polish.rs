@@ -1,0 +1,140 @@
+//! The polished last Newton step (`NewtonOptions::polish`): taken on the factorisation that
+//! computed it and checked by a gradient assembly, it must reach the same equilibrium as the
+//! solve that assembles and factorises once more, within the residual tolerance, for one
+//! Hessian assembly fewer; and the gradient it hands back must be the one at the solution.
+
+use kshell::assembly::{BlockMatrix, Want};
+use kshell::material::{load_material, OutOfDomain};
+use kshell::model::ClothModel;
+use kshell::solve::{newton_linearized, FreeSystem, NewtonOptions};
+use kshell::tri::{TriGrid, TriKind, TriMaterial, TriModel};
+use kshell::Vec3;
+use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+use std::sync::Arc;
+
+/// A model that counts its Hessian and gradient-only assemblies.
+struct Counting {
+    inner: TriModel,
+    hessians: AtomicUsize,
+    gradients: AtomicUsize,
+}
+
+impl ClothModel for Counting {
+    fn pattern(&self) -> &Arc<kshell::assembly::BlockPattern> {
+        self.inner.pattern()
+    }
+    fn num_nodes(&self) -> usize {
+        self.inner.num_nodes()
+    }
+    fn assemble(
+        &self,
+        x: &[Vec3],
+        want: Want,
+        grad: Option<&mut [Vec3]>,
+        hess: Option<&mut BlockMatrix>,
+    ) -> Result<f64, OutOfDomain> {
+        match want {
+            Want::Hessian => {
+                self.hessians.fetch_add(1, Relaxed);
+            }
+            Want::Gradient => {
+                self.gradients.fetch_add(1, Relaxed);
+            }
+            Want::Energy => {}
+        }
+        self.inner.assemble(x, want, grad, hess)
+    }
+    fn external_load(&self) -> Vec<Vec3> {
+        self.inner.external_load()
+    }
+    fn lumped_mass(&self) -> Vec<f64> {
+        self.inner.lumped_mass()
+    }
+}
+
+/// A 6 × 3 stvk-ds cantilever of the example cotton under gravity, its first column clamped
+/// (a bending problem: Newton needs several steps from the flat sheet).
+fn cantilever() -> (Counting, FreeSystem, Vec<Vec3>) {
+    let cotton = load_material(std::path::Path::new("examples/materials/cotton.toml")).unwrap();
+    let mat = TriMaterial::equivalent(TriKind::StvkDs, &cotton, 0.005, 100.0).unwrap();
+    let mut inner = TriModel::new(TriGrid::rectangle(0.06, 0.03, 6, 3), mat, 0.0);
+    inner.set_gravity([0.0, 0.0, -9.81]);
+    let rest = inner.grid.positions();
+    let n = inner.num_nodes();
+    let fixed: Vec<bool> = (0..3 * n).map(|d| rest[d / 3][0] < 1e-9).collect();
+    let system = FreeSystem::new(&inner, &fixed).unwrap();
+    let model = Counting {
+        inner,
+        hessians: AtomicUsize::new(0),
+        gradients: AtomicUsize::new(0),
+    };
+    (model, system, rest)
+}
+
+#[test]
+fn a_polished_last_step_reaches_the_same_equilibrium_for_one_tangent_fewer() {
+    let (model, system, rest) = cantilever();
+    let mut runs = Vec::new();
+    for polish in [false, true] {
+        let opts = NewtonOptions {
+            polish,
+            rtol: 1e-8,
+            max_iterations: 300,
+            ..NewtonOptions::default()
+        };
+        model.hessians.store(0, Relaxed);
+        model.gradients.store(0, Relaxed);
+        let mut x = rest.clone();
+        let (report, lin) = newton_linearized(&model, &system, &mut x, &opts).unwrap();
+        assert!(
+            report.residual <= 1e-8 || report.precision_limited,
+            "{report:?}"
+        );
+        assert!(report.stable);
+        assert_eq!(report.polished, polish, "{report:?}");
+        let lin = lin.expect("a stable equilibrium has its linearisation");
+        // the gradient handed back is the solution's (the reactions), whichever point the
+        // tangent is of
+        let mut g = vec![[0.0; 3]; x.len()];
+        model
+            .inner
+            .assemble(&x, Want::Gradient, Some(&mut g), None)
+            .unwrap();
+        let scale = g.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in lin.gradient.iter().flatten().zip(g.iter().flatten()) {
+            assert!((a - b).abs() <= 1e-12 * scale, "{a} against {b}");
+        }
+        runs.push((
+            x,
+            report,
+            model.hessians.load(Relaxed),
+            model.gradients.load(Relaxed),
+        ));
+    }
+    let (plain, polished) = (&runs[0], &runs[1]);
+    assert!(
+        plain.1.iterations >= 3,
+        "a problem that needs several steps"
+    );
+    // the same equilibrium to within what the residual tolerance allows (a tip deflection of
+    // centimetres, agreement to a nanometre)
+    let size = rest.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    let moved = plain
+        .0
+        .iter()
+        .zip(&rest)
+        .map(|(a, b)| (a[2] - b[2]).abs())
+        .fold(0.0, f64::max);
+    assert!(moved > 1e-3 * size, "the sheet bends: {moved} m");
+    for (a, b) in plain.0.iter().flatten().zip(polished.0.iter().flatten()) {
+        assert!((a - b).abs() <= 1e-9 * size, "{a} against {b}");
+    }
+    // the same steps; one Hessian assembly fewer (the confirming one), one gradient more
+    assert_eq!(polished.1.iterations, plain.1.iterations);
+    assert_eq!(polished.2 + 1, plain.2, "Hessian assemblies");
+    assert_eq!(
+        polished.3,
+        plain.3 + 1 + polished.1.polish_misses,
+        "gradient assemblies"
+    );
+}
