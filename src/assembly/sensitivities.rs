@@ -74,14 +74,17 @@ impl ShellModel {
         let nn = self.num_nodes();
         let mut energy = vec![0.0; np];
         let mut gradient = vec![vec![[0.0; 3]; nn]; np];
+        // one point's terms, reused from point to point
+        let mut dey = vec![0.0; np];
+        let mut dgy = vec![YVec::zeros(); np];
         for q in 0..self.basis.num_points() {
             let (idx, w) = self.basis.stencil(q);
             let y = self.kinematics_at(q, x);
             let rest = &self.rest[q];
             let (m, b) = rest.strains(&y);
             let da = rest.d_area;
-            let mut dey = vec![0.0; np];
-            let mut dgy = vec![YVec::zeros(); np];
+            dey.fill(0.0);
+            dgy.fill(YVec::zeros());
             if self.bending.is_some() {
                 self.own_bending_terms(&(&m, &b), nlaw, &want, &mut dey, &mut dgy)?;
             } else {
@@ -98,8 +101,8 @@ impl ShellModel {
                 break;
             };
             let (m, _) = rest.strains(&y);
-            let mut dey = vec![0.0; np];
-            let mut dgy = vec![YVec::zeros(); np];
+            dey.fill(0.0);
+            dgy.fill(YVec::zeros());
             self.yarn_terms(&m, moved, nlaw, &want, &mut dey, &mut dgy)?;
             add_point(
                 rest.d_area,
@@ -131,11 +134,13 @@ impl ShellModel {
     ) -> Result<(), OutOfDomain> {
         let em = Vector3::from(m.value);
         let tau = sign * self.thickness;
-        let pr = self.law.yarn_param_response(&em)?;
-        for j in 0..nlaw {
-            if want(j) {
-                dey[j] += tau * pr.dpsi[j];
-                dgy[j] += tau * pull_back(&pr.dstress[j], m);
+        if (0..nlaw).any(want) {
+            let pr = self.law.yarn_param_response(&em)?;
+            for j in 0..nlaw {
+                if want(j) {
+                    dey[j] += tau * pr.dpsi[j];
+                    dgy[j] += tau * pull_back(&pr.dstress[j], m);
+                }
             }
         }
         if want(nlaw) {
@@ -158,21 +163,24 @@ impl ShellModel {
         let em = Vector3::from(m.value);
         let eb = Vector3::from(b.value);
         let tau = self.thickness;
+        let any_law = (0..nlaw).any(want);
         for &(xi, wt) in &self.thickness_rule {
             let e = em + xi * eb;
-            let r = self.law.response(&e)?;
-            let pr = self.law.param_response(&e)?;
             // G(ξ)ᵀ v = Σ_k v_k (∇Ẽm_k + ξ ∇Ẽb_k)
             let gt = |v: &Vector3<f64>| pull_back(v, m) + xi * pull_back(v, b);
-            for j in 0..nlaw {
-                if want(j) {
-                    dey[j] += wt * pr.dpsi[j];
-                    dgy[j] += wt * gt(&pr.dstress[j]);
+            if any_law {
+                let pr = self.law.param_response(&e)?;
+                for j in 0..nlaw {
+                    if want(j) {
+                        dey[j] += wt * pr.dpsi[j];
+                        dgy[j] += wt * gt(&pr.dstress[j]);
+                    }
                 }
             }
             if !want(nlaw) {
                 continue;
             }
+            let r = self.law.response(&e)?;
             let jt = nlaw;
             dey[jt] += wt / tau * r.psi + wt * xi / tau * r.stress.dot(&eb);
             dgy[jt] += (wt / tau) * gt(&r.stress)
@@ -194,15 +202,17 @@ impl ShellModel {
         let em = Vector3::from(m.value);
         let tau = self.thickness;
         let gm = |v: &Vector3<f64>| pull_back(v, m);
-        let r = self.law.response(&em)?;
-        let pr = self.law.param_response(&em)?;
-        for j in 0..nlaw {
-            if want(j) {
-                dey[j] += tau * pr.dpsi[j];
-                dgy[j] += tau * gm(&pr.dstress[j]);
+        if (0..nlaw).any(want) {
+            let pr = self.law.param_response(&em)?;
+            for j in 0..nlaw {
+                if want(j) {
+                    dey[j] += tau * pr.dpsi[j];
+                    dgy[j] += tau * gm(&pr.dstress[j]);
+                }
             }
         }
         if want(nlaw) {
+            let r = self.law.response(&em)?;
             dey[nlaw] += r.psi;
             dgy[nlaw] += gm(&r.stress);
         }

@@ -71,21 +71,29 @@ impl Eta {
 
     /// (∂η, ∂η', ∂η'') with respect to each μᵢ, then each αᵢ.
     pub(crate) fn param_derivs(&self, x: f64) -> Vec<[f64; 3]> {
+        let mut out = vec![[0.0; 3]; 2 * self.degree()];
+        self.each_param_deriv(x, |i, v| out[i] = v);
+        out
+    }
+
+    /// [`Eta::param_derivs`] handed out one by one as `(index, value)` without allocating
+    /// (the sensitivity assembly calls it at every Gauss point).
+    pub(crate) fn each_param_deriv(&self, x: f64, mut put: impl FnMut(usize, [f64; 3])) {
         let b = x + 1.0;
         let lb = x.ln_1p();
-        let mut dmu = Vec::with_capacity(self.degree());
-        let mut dalpha = Vec::with_capacity(self.degree());
-        for (&m, &a) in self.mu.iter().zip(&self.alpha) {
+        let d = self.degree();
+        for (j, (&m, &a)) in self.mu.iter().zip(&self.alpha).enumerate() {
             let pm1 = (a * lb).exp_m1();
             let p = pm1 + 1.0;
-            dmu.push([pm1 / a, p / b, (a - 1.0) * p / (b * b)]);
-            dalpha.push([
-                m * (p * lb / a - pm1 / (a * a)),
-                m * p * lb / b,
-                m * p / (b * b) * (1.0 + (a - 1.0) * lb),
-            ]);
+            put(j, [pm1 / a, p / b, (a - 1.0) * p / (b * b)]);
+            put(
+                d + j,
+                [
+                    m * (p * lb / a - pm1 / (a * a)),
+                    m * p * lb / b,
+                    m * p / (b * b) * (1.0 + (a - 1.0) * lb),
+                ],
+            );
         }
-        dmu.extend(dalpha);
-        dmu
     }
 }

@@ -118,26 +118,27 @@ impl Term<'_> {
         Some([f + f1 * d + 0.5 * f2 * d * d, f1 + f2 * d, f2])
     }
 
-    /// (∂f/∂k, ∂f'/∂k) for k = c, then each μ, then each α.
-    fn param_eval(&self, e: f64) -> Option<Vec<[f64; 2]>> {
+    /// (∂f/∂k, ∂f'/∂k) for k = c, then each μ, then each α, handed to `row(index, value)`
+    /// without allocating (this runs at every Gauss point of every sensitivity assembly);
+    /// `None` where a value is not finite.
+    fn param_eval(&self, e: f64, mut row: impl FnMut(usize, [f64; 2])) -> Option<()> {
         let ec = e.clamp(self.range.0, self.range.1);
         let d = e - ec;
         let x = ec * ec;
         let [h, h1, h2] = self.eta.eval(x)?;
         // (∂f, ∂f', ∂f'') at e_c for each parameter, then the Taylor extension
-        let mut rows = vec![[0.5 * h, ec * h1, h1 + 2.0 * x * h2]];
-        for [g, g1, g2] in self.eta.param_derivs(x) {
-            rows.push([
-                0.5 * self.c * g,
-                self.c * ec * g1,
-                self.c * (g1 + 2.0 * x * g2),
-            ]);
-        }
-        let out: Vec<[f64; 2]> = rows
-            .iter()
-            .map(|[a, b, c]| [a + b * d + 0.5 * c * d * d, b + c * d])
-            .collect();
-        out.iter().flatten().all(|v| v.is_finite()).then_some(out)
+        let mut finite = true;
+        let mut put = |i: usize, [a, b, c]: [f64; 3]| {
+            let v = [a + b * d + 0.5 * c * d * d, b + c * d];
+            finite &= v[0].is_finite() && v[1].is_finite();
+            row(i, v);
+        };
+        put(0, [0.5 * h, ec * h1, h1 + 2.0 * x * h2]);
+        let c = self.c;
+        self.eta.each_param_deriv(x, |i, [g, g1, g2]| {
+            put(i + 1, [0.5 * c * g, c * ec * g1, c * (g1 + 2.0 * x * g2)])
+        });
+        finite.then_some(())
     }
 }
 
@@ -197,6 +198,12 @@ impl Orthotropic {
     }
 
     /// Current parameter values, in [`Orthotropic::names`] order.
+    /// The length of [`Orthotropic::params`].
+    pub fn num_params(&self) -> usize {
+        let etas = self.warp.degree() + self.weft.degree() + self.shear.degree();
+        4 + 2 * etas + if self.coupling.is_some() { 2 } else { 0 }
+    }
+
     pub fn params(&self) -> Vec<f64> {
         let mut k = vec![self.a11, self.a22, self.a12, self.g12];
         for eta in [&self.warp, &self.weft, &self.shear] {
@@ -255,7 +262,7 @@ impl Orthotropic {
         let bad = || OutOfDomain {
             strain: [e[0], e[1], e[2]],
         };
-        let n = self.params().len();
+        let n = self.num_params();
         let mut dpsi = vec![0.0; n];
         let mut dstress = vec![Vector3::zeros(); n];
         // a12: ψ₂ = a12 e11 e22
@@ -283,15 +290,18 @@ impl Orthotropic {
         };
         // parameter blocks are ordered warp, weft, shear = components 0, 1, 2
         for (comp, term) in terms.iter().enumerate() {
-            let rows = term.param_eval(e[comp]).ok_or_else(bad)?;
             let s = stiff_index[comp];
-            let (p, v) = spread(comp, rows[0]);
-            dpsi[s] += stiff_factor[comp] * p;
-            dstress[s] += stiff_factor[comp] * v;
-            for (j, r) in rows[1..].iter().enumerate() {
-                (dpsi[at + j], dstress[at + j]) = spread(comp, *r);
-            }
-            at += rows.len() - 1;
+            term.param_eval(e[comp], |i, r| {
+                let (p, v) = spread(comp, r);
+                if i == 0 {
+                    dpsi[s] += stiff_factor[comp] * p;
+                    dstress[s] += stiff_factor[comp] * v;
+                } else {
+                    (dpsi[at + i - 1], dstress[at + i - 1]) = (p, v);
+                }
+            })
+            .ok_or_else(bad)?;
+            at += 2 * term.eta.degree();
         }
         if let Some([(g1, dg1), (g2, dg2)]) = factors {
             let [f, f1, _] = terms[2].eval(e[2]).ok_or_else(bad)?;
@@ -440,6 +450,23 @@ mod tests {
             Vector3::new(0.11, -0.02, -0.3),
             Vector3::new(0.07, 0.04, 0.0),
         ]
+    }
+
+    #[test]
+    fn the_parameter_count_is_that_of_the_parameters() {
+        for law in [
+            sample(),
+            coupled(),
+            Orthotropic::from(OrthotropicStvk {
+                a11: 1.0,
+                a22: 2.0,
+                a12: 0.5,
+                g12: 0.3,
+            }),
+        ] {
+            assert_eq!(law.num_params(), law.params().len());
+            assert_eq!(law.num_params(), law.names().len());
+        }
     }
 
     #[test]
