@@ -34,6 +34,11 @@ pub use system::{FreeSystem, Slave};
 /// reached the round-off floor (see [`newton`]).
 pub(crate) const STALL_RTOL: f64 = 1e-6;
 
+/// Linear residual of a Newton step, relative to its right-hand side, below which the step is
+/// not refined (see [`refine::refine_to`]): from a relative residual r the step then leaves at
+/// most 1e-8 r beside the O(r²) of the nonlinearity, under any `rtol` in use (1e-8 to 1e-10).
+pub(crate) const STEP_FORCING: f64 = 1e-8;
+
 /// The linear algebra could not be set up or failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolveError {

@@ -3,7 +3,7 @@
 
 use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
-    STALL_RTOL,
+    STALL_RTOL, STEP_FORCING,
 };
 use crate::assembly::{BlockMatrix, Want};
 use crate::model::ClothModel;
@@ -250,12 +250,13 @@ pub(super) fn line_search(
         let rhs = d.clone();
         llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut d, nf, 1));
         if opts.refine_steps > 0 {
-            let rep = refine::refine(
+            let rep = refine::refine_to(
                 &system.sym_lower(&values),
                 &rhs,
                 &mut d,
                 opts.precision,
                 opts.refine_steps,
+                STEP_FORCING * norm(&rhs),
                 |r| llt.solve_in_place(MatMut::from_column_major_slice_mut(r, nf, 1)),
             );
             report.refinement_steps += rep.steps;

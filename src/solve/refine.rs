@@ -143,6 +143,24 @@ pub fn refine(
     x: &mut [f64],
     prec: Precision,
     max_steps: usize,
+    solve: impl FnMut(&mut [f64]),
+) -> RefineReport {
+    refine_to(a, b, x, prec, max_steps, 0.0, solve)
+}
+
+/// [`refine`], but no correction is made once ‖b − A x‖₂ ≤ `enough`: a Newton step needs its
+/// linear residual small against the nonlinear one, not at working precision (an inexact
+/// Newton step with forcing term η leaves η r + O(r²) from a residual r), so the
+/// factorisation's own solution, whose residual is checked here in the chosen precision, is
+/// usually kept as it is, and the corrections are made where the tangent's conditioning
+/// needs them.
+pub fn refine_to(
+    a: &SymLower,
+    b: &[f64],
+    x: &mut [f64],
+    prec: Precision,
+    max_steps: usize,
+    enough: f64,
     mut solve: impl FnMut(&mut [f64]),
 ) -> RefineReport {
     let n = x.len();
@@ -153,7 +171,11 @@ pub fn refine(
     report.residuals.push(norm(&r));
     let mut last = f64::INFINITY;
     for _ in 0..max_steps {
-        if report.residuals.last() == Some(&0.0) {
+        if report
+            .residuals
+            .last()
+            .is_some_and(|&r| r == 0.0 || r <= enough)
+        {
             break;
         }
         let mut corr = r.clone();

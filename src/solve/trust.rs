@@ -15,7 +15,7 @@
 use super::newton::{linearize, perturb, Balance};
 use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
-    STALL_RTOL,
+    STALL_RTOL, STEP_FORCING,
 };
 use crate::assembly::BlockMatrix;
 use crate::model::ClothModel;
@@ -193,12 +193,13 @@ fn try_step(
     let rhs = d.clone();
     llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut d, nf, 1));
     if opts.refine_steps > 0 {
-        let rep = refine::refine(
+        let rep = refine::refine_to(
             &system.sym_lower(&shifted),
             &rhs,
             &mut d,
             opts.precision,
             opts.refine_steps,
+            STEP_FORCING * norm(&rhs),
             |r| llt.solve_in_place(MatMut::from_column_major_slice_mut(r, nf, 1)),
         );
         report.refinement_steps += rep.steps;
