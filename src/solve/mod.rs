@@ -79,7 +79,8 @@ pub struct NewtonOptions {
     pub full_steps: usize,
     /// A Newton step from a relative residual under √rtol is taken whole and checked by a
     /// gradient assembly, without a further Hessian assembly and factorisation where it lands
-    /// within `rtol` (the tangent of the point before is kept as the linearisation).
+    /// within `rtol` (the tangent of the point before is kept as the linearisation). The
+    /// line-search strategies only; the trust region confirms its last step as before.
     pub polish: bool,
 }
 

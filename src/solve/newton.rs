@@ -387,9 +387,10 @@ pub(super) fn line_search(
 /// factorisation: from a relative residual r ≤ √rtol a Newton step leaves about r² (quadratic
 /// convergence), so the equilibrium usually needs no new tangent. Where the step lands within
 /// `rtol` (or the round-off floor, measured with the diagonal of the tangent it came from),
-/// `x` moves there and what it found there comes back; the caller keeps the tangent at the point before as the linearisation, which is first-order
-/// accurate in the step (sensitivities and predictors to about r). Otherwise `x` is left as
-/// it was and `None` comes back (one gradient assembly spent).
+/// `x` moves there and what it found there comes back; the caller keeps the tangent at the
+/// point before as the linearisation, which is first-order accurate in the step (sensitivities
+/// and predictors to about r). Otherwise `x` is left as it was and `None` comes back (one
+/// gradient assembly spent).
 fn polish(
     model: &dyn ClothModel,
     system: &FreeSystem,
