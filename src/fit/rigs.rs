@@ -191,7 +191,9 @@ impl Fitter<'_> {
     /// mesh and its half) solved in one batch, so that a long solve on one level keeps one core
     /// while the other takes the rest (the ratio-2e4 fit of `paper_repro/stiff_fit`: its
     /// wrinkling 67.5° strip takes 36 s on 16 × 24, its nine other solves of the first per-test
-    /// sweep 21 s; that sweep took 43 s with the levels one after the other, 37 s in one batch).
+    /// sweep 21 s; that sweep took 43 s with the levels one after the other and before the
+    /// cheap phase's early end in `scene::tensile`, 39 s with both, in one batch split in
+    /// halves, and 37 s taken in order).
     pub(super) fn predict_levels(
         &mut self,
         jobs: &[(usize, f64, (usize, usize))],
