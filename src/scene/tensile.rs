@@ -499,7 +499,8 @@ impl StripRig {
     /// the state (a wrinkle pattern reorganising over hundreds of iterations), not the step,
     /// and quarter and eighth steps only spent 80–120 iterations more before the whole budget
     /// (measured: the ratio-2e4 strips on a graded 8 × 12 cage, 12 nodes to 7.5 mm: at 67.5°
-    /// 2402 → 2069 iterations, at 22.5° 1296 → 1101, every force the same to 7 digits).
+    /// 2402 → 2069 iterations, at 22.5° 1296 → 1101, every force the same to the 6–8 digits
+    /// printed).
     fn solve_cold(
         &mut self,
         previous: &Last,
