@@ -509,12 +509,7 @@ impl Fitter<'_> {
             .iter()
             .map(|&s| (s, self.prep.strips[s].angle_deg))
             .collect();
-        let both: Vec<_> = [last, finer]
-            .iter()
-            .flat_map(|&l| jobs.iter().map(move |&(s, a)| (s, a, l)))
-            .collect();
-        let mut coarse = self.predict_levels(&both)?;
-        let fine = coarse.split_off(jobs.len());
+        let (coarse, fine) = self.predict_pair(&jobs, last, finer)?;
         let (mut dr, mut labels) = (Vec::new(), Vec::new());
         for (i, &s) in strips.iter().enumerate() {
             for c in self.used_curves(&[s]) {

@@ -84,12 +84,7 @@ impl Fitter<'_> {
             .map(|s| (s, self.prep.strips[s].angle_deg))
             .collect();
         let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
-        let both: Vec<_> = [last, half]
-            .iter()
-            .flat_map(|&l| jobs.iter().map(move |&(s, a)| (s, a, l)))
-            .collect();
-        let mut fine = self.predict_levels(&both)?;
-        let rough = fine.split_off(jobs.len());
+        let (fine, rough) = self.predict_pair(&jobs, last, half)?;
         let order = super::mesh_check::order(self.opts.grading, self.yarns());
         let mut out = Vec::new();
         for (s, strip) in self.prep.strips.iter().enumerate() {

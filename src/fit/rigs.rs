@@ -20,6 +20,9 @@ pub(super) fn strip_mesh(level: (usize, usize), width: f64, length: f64) -> (usi
     (across, along)
 }
 
+/// Forces of a strip at its nodes.
+type NodeSet = Vec<f64>;
+
 /// Forces of a strip at its nodes and ∂F/∂k (law parameters, then thickness) when asked.
 pub(super) type NodeForces = (Vec<f64>, Vec<Vec<f64>>);
 
@@ -185,6 +188,23 @@ impl Fitter<'_> {
     ) -> Result<Vec<Vec<f64>>, FitError> {
         let jobs: Vec<_> = jobs.iter().map(|&(s, angle)| (s, angle, level)).collect();
         self.predict_levels(&jobs)
+    }
+
+    /// The same jobs on two mesh levels, solved in one batch ([`Fitter::predict_levels`]):
+    /// the forces on `a`, then on `b`.
+    pub(super) fn predict_pair(
+        &mut self,
+        jobs: &[(usize, f64)],
+        a: (usize, usize),
+        b: (usize, usize),
+    ) -> Result<(Vec<NodeSet>, Vec<NodeSet>), FitError> {
+        let both: Vec<_> = [a, b]
+            .iter()
+            .flat_map(|&l| jobs.iter().map(move |&(s, angle)| (s, angle, l)))
+            .collect();
+        let mut on_a = self.predict_levels(&both)?;
+        let on_b = on_a.split_off(jobs.len());
+        Ok((on_a, on_b))
     }
 
     /// [`Fitter::predict_many`] with a mesh level per job: strips on two levels (an estimate's
