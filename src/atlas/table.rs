@@ -21,6 +21,7 @@ pub fn explain(e: &SceneError) -> String {
                 SolveError::NotConverged {
                     iterations,
                     residual,
+                    ..
                 } => format!(
                     "stagnation: {iterations} iterations did not reach the tolerance (residual {residual:.1e})"
                 ),

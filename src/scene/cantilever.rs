@@ -134,12 +134,19 @@ impl BendRig {
         // Newton iterations of a warm start given up on: counted in the report with the
         // ramp's, so that the fitter's counts are of all the work done
         let mut spent = 0;
+        let mut spent_factorizations = 0;
         let solved = if warm {
             match newton(&self.model, &self.system, &mut x, &self.bend.solver) {
                 Ok(r) => Some(r),
                 Err(e) => {
-                    if let SolveError::NotConverged { iterations, .. } = e {
+                    if let SolveError::NotConverged {
+                        iterations,
+                        factorizations,
+                        ..
+                    } = e
+                    {
                         spent = iterations;
+                        spent_factorizations = factorizations;
                     }
                     None
                 }
@@ -174,6 +181,7 @@ impl BendRig {
             }
         };
         report.iterations += spent;
+        report.factorizations += spent_factorizations;
         let surface = self.model.basis.surface();
         let stencil = |(face, u): (usize, f64), v: f64| {
             surface

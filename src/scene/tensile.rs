@@ -163,6 +163,7 @@ impl TensileStrip {
             tangents: vec![None; elongations.len()],
             earlier: vec![Vec::new(); elongations.len()],
             spent: 0,
+            spent_factorizations: 0,
             solved_params: vec![None; elongations.len()],
             params: {
                 let mut k = material.law.params();
@@ -225,6 +226,8 @@ pub struct StripRig {
     /// start that did not converge, sub-steps): added to the point's report, so that counts
     /// of iterations are of all the work done
     spent: usize,
+    /// the factorisations of those attempts
+    spent_factorizations: usize,
     /// per point: the parameters of the stored equilibrium
     solved_params: Vec<Option<Vec<f64>>>,
     params: Vec<f64>,
@@ -327,6 +330,7 @@ impl StripRig {
                 }
             };
             report.iterations += std::mem::take(&mut self.spent);
+            report.factorizations += std::mem::take(&mut self.spent_factorizations);
             let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
                 stage: "reaction".into(),
                 source: SolveError::StartOutOfDomain(e.to_string()),
@@ -469,8 +473,14 @@ impl StripRig {
             ..self.solver
         };
         let solved = crate::solve::newton_linearized(&self.model, &self.system, &mut x, &opts);
-        if let Err(SolveError::NotConverged { iterations, .. }) = &solved {
+        if let Err(SolveError::NotConverged {
+            iterations,
+            factorizations,
+            ..
+        }) = &solved
+        {
             self.spent += iterations;
+            self.spent_factorizations += factorizations;
         }
         solved
             .map(|(report, lin)| (x, report, lin))
@@ -574,6 +584,7 @@ impl StripRig {
                     return Some((x, report, lin));
                 }
                 self.spent += report.iterations;
+                self.spent_factorizations += report.factorizations;
                 let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
                 last = Some((e, x, slope));
             }

@@ -97,6 +97,7 @@ pub fn continuation<M: ClothModel>(
             }
             Err(e) => {
                 report.iterations += opts.max_iterations;
+                report.factorizations += failed_factorizations(&e);
                 step *= 0.5;
                 if step < 1e-4 {
                     apply(model, factor, x);
@@ -144,7 +145,10 @@ fn whole_load<M: ClothModel>(
             report.iterations += r.iterations;
             report.factorizations += r.factorizations;
         }
-        Err(_) => report.iterations += opts.max_iterations,
+        Err(e) => {
+            report.iterations += opts.max_iterations;
+            report.factorizations += failed_factorizations(&e);
+        }
     }
     None
 }
@@ -169,6 +173,15 @@ fn adaptive_scale(last: &[Vec3], predicted: &[Vec3], corrected: &[Vec3]) -> f64 
         2.0
     } else {
         (ADAPTIVE_TOL / e).sqrt().clamp(0.5, 2.0)
+    }
+}
+
+/// The factorisations a failed solve made, where its error says (counted with the
+/// successful ones: the work done).
+fn failed_factorizations(e: &SolveError) -> usize {
+    match e {
+        SolveError::NotConverged { factorizations, .. } => *factorizations,
+        _ => 0,
     }
 }
 

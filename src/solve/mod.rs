@@ -49,7 +49,12 @@ pub enum SolveError {
     #[error(
         "Newton did not converge in {iterations} iterations (relative residual {residual:.3e})"
     )]
-    NotConverged { iterations: usize, residual: f64 },
+    NotConverged {
+        iterations: usize,
+        residual: f64,
+        /// factorisations the attempt made (failed ones included), for counts of all the work
+        factorizations: usize,
+    },
     #[error("the line search found no decrease of the energy (relative residual {residual:.3e})")]
     Stalled { residual: f64 },
     #[error("linear solve failed: {0}")]

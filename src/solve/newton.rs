@@ -379,6 +379,7 @@ pub(super) fn line_search(
     Err(SolveError::NotConverged {
         iterations: opts.max_iterations,
         residual: report.residual,
+        factorizations: report.factorizations,
     })
 }
 

@@ -142,6 +142,7 @@ pub(super) fn trust_region(
     Err(SolveError::NotConverged {
         iterations: opts.max_iterations,
         residual: report.residual,
+        factorizations: report.factorizations,
     })
 }
 
