@@ -34,7 +34,7 @@ impl ClothModel for Counting {
         hess: Option<&mut BlockMatrix>,
     ) -> Result<f64, OutOfDomain> {
         match want {
-            Want::Hessian => {
+            Want::Hessian | Want::ProjectedHessian => {
                 self.hessians.fetch_add(1, Relaxed);
             }
             Want::Gradient => {
@@ -46,6 +46,9 @@ impl ClothModel for Counting {
     }
     fn external_load(&self) -> Vec<Vec3> {
         self.inner.external_load()
+    }
+    fn convexifies(&self) -> bool {
+        self.inner.convexifies()
     }
     fn lumped_mass(&self) -> Vec<f64> {
         self.inner.lumped_mass()

@@ -61,7 +61,7 @@ impl ShellModel {
         if want != Want::Energy {
             s.n += tau * r.stress;
         }
-        if want == Want::Hessian {
+        if want.hessian() {
             s.c0 += tau * r.tangent;
         }
         Ok(s)
@@ -86,7 +86,7 @@ impl ShellModel {
                 s.n = tau * r.stress;
                 s.mo = m;
             }
-            if want == Want::Hessian {
+            if want.hessian() {
                 s.c0 = tau * r.tangent;
                 s.c2 = d;
             }
@@ -99,7 +99,7 @@ impl ShellModel {
                 s.n += w * r.stress;
                 s.mo += w * xi * r.stress;
             }
-            if want == Want::Hessian {
+            if want.hessian() {
                 s.c0 += w * r.tangent;
                 s.c1 += (w * xi) * r.tangent;
                 s.c2 += (w * xi * xi) * r.tangent;

@@ -320,6 +320,7 @@ impl Case {
         fallbacks.push(SolveReport {
             fallbacks: c.fallbacks.clone(),
             curvature_steps: c.curvature_steps,
+            convexified_steps: c.convexified_steps,
             ..deformed.last.clone()
         });
         Ok(())

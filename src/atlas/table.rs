@@ -63,6 +63,10 @@ pub(super) fn what_happened(row: &Row, solves: &[SolveReport]) -> String {
     if curvature > 0 {
         parts.push(format!("{curvature} negative-curvature steps"));
     }
+    let convexified: usize = solves.iter().map(|r| r.convexified_steps).sum();
+    if convexified > 0 {
+        parts.push(format!("{convexified} convexified steps"));
+    }
     if solves.iter().any(|r| r.trust_region_gave_up) {
         parts.push("trust region gave up, line search finished".into());
     }

@@ -34,6 +34,12 @@ pub trait ClothModel: Sync {
     fn energy(&self, x: &[Vec3]) -> Result<f64, OutOfDomain> {
         self.assemble(x, Want::Energy, None, None)
     }
+    /// Whether [`Want::ProjectedHessian`] gives a convexified Hessian (the shell's, see
+    /// [`crate::assembly::Want`]); models without one hand back their exact Hessian there, and
+    /// the solver does not ask them for it.
+    fn convexifies(&self) -> bool {
+        false
+    }
 }
 
 impl ClothModel for ShellModel {
@@ -60,5 +66,8 @@ impl ClothModel for ShellModel {
     }
     fn energy(&self, x: &[Vec3]) -> Result<f64, OutOfDomain> {
         ShellModel::energy(self, x)
+    }
+    fn convexifies(&self) -> bool {
+        true
     }
 }

@@ -110,6 +110,7 @@ impl Drape {
         counts.backward_euler_steps += weight.last.backward_euler_steps;
         counts.fallbacks = weight.last.fallbacks.clone();
         counts.curvature_steps += weight.last.curvature_steps;
+        counts.convexified_steps += weight.last.convexified_steps;
         for (p, b) in x.iter_mut().zip(&bump) {
             p[1] += self.perturbation * l * b;
         }

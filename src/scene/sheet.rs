@@ -238,6 +238,8 @@ pub struct SolveCounts {
     /// Why backward Euler was used, over the kept solves.
     pub fallbacks: FallbackCounts,
     pub curvature_steps: usize,
+    /// Steps on the convexified Hessian (after negative-curvature steps).
+    pub convexified_steps: usize,
     /// Seconds in assembly and in factorisation, kept solves only.
     pub assembly_seconds: f64,
     pub factor_seconds: f64,
@@ -254,6 +256,7 @@ impl SolveCounts {
         self.saddle_escapes += o.saddle_escapes;
         add_fallbacks(&mut self.fallbacks, &o.fallbacks);
         self.curvature_steps += o.curvature_steps;
+        self.convexified_steps += o.convexified_steps;
         self.assembly_seconds += o.assembly_seconds;
         self.factor_seconds += o.factor_seconds;
     }
@@ -266,6 +269,7 @@ impl SolveCounts {
         self.saddle_escapes += r.saddle_escapes;
         add_fallbacks(&mut self.fallbacks, &r.fallbacks);
         self.curvature_steps += r.curvature_steps;
+        self.convexified_steps += r.convexified_steps;
         self.assembly_seconds += r.assembly_seconds;
         self.factor_seconds += r.factor_seconds;
     }

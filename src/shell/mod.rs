@@ -291,6 +291,20 @@ impl RestPoint {
         add_bending_hessian(y, &(t * mo).into(), h);
     }
 
+    /// h += Σ_k n⁺_k ∂²Ẽm_k/∂y² with n⁺ the tensile part of the membrane stress n: the weights
+    /// pulled back to surface coordinates act on the strains' Hessian as the 2 × 2 tensor
+    /// [[t₁, t₃/2], [t₃/2, t₂]] ⊗ I₃, whose negative eigenvalues (compression) are dropped.
+    /// The bending moments' term is left out. What remains is positive semidefinite.
+    #[inline]
+    pub fn add_tensile_membrane_hessian(&self, n: &Vector3<f64>, h: &mut YMat) {
+        let t = self.to_material.transpose() * n;
+        let s = nalgebra::Matrix2::new(t[0], 0.5 * t[2], 0.5 * t[2], t[1]);
+        let e = nalgebra::SymmetricEigen::new(s);
+        let l = e.eigenvalues.map(|v| v.max(0.0));
+        let p = e.eigenvectors * nalgebra::Matrix2::from_diagonal(&l) * e.eigenvectors.transpose();
+        add_membrane_hessian(&[p[(0, 0)], p[(1, 1)], 2.0 * p[(0, 1)]], h);
+    }
+
     /// Membrane and bending strains alone, in the warp/weft frame (the energy needs no more).
     pub fn strain_values(&self, y: &YVec) -> (Vector3<f64>, Vector3<f64>) {
         let (a1, a2) = (v3(y, A1), v3(y, A2));

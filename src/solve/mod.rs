@@ -212,6 +212,9 @@ pub struct SolveReport {
     /// Steps along a direction of negative curvature (see `curvature`), taken where Newton's
     /// factorisation failed.
     pub curvature_steps: usize,
+    /// Steps on the convexified Hessian (`Want::ProjectedHessian`), taken after a
+    /// negative-curvature step where Newton's factorisation fails again (see `newton`).
+    pub convexified_steps: usize,
     /// Line-search step halvings in total (trust region: rejected steps).
     pub backtracks: usize,
     /// [`Strategy::TrustRegion`] only: the trust region gave up and the line-search solver

@@ -124,6 +124,11 @@ pub(super) fn line_search(
     let mut gf = vec![0.0; nf];
     let mut d = vec![0.0; nf];
     let mut mode = Mode::Newton;
+    // the convexified Hessian's entries, and whether the last fallback step was along negative
+    // curvature (the next one is then a step on the convexified Hessian)
+    let mut phess = BlockMatrix::zeros(model.pattern().clone());
+    let mut pvalues = Vec::new();
+    let mut after_curvature = false;
     let mut mu = 0.0f64;
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
     let mut be_energy: Vec<f64> = Vec::new();
@@ -198,6 +203,7 @@ pub(super) fn line_search(
         // the factorisation is of the Hessian itself (Newton's, not shifted): a step on it may
         // be the last one (see `polish`)
         let mut own_hessian = false;
+        let mut projected_step = false;
         let llt = match mode {
             Mode::Newton => match system.try_factor(&values)? {
                 Some(llt) => {
@@ -214,29 +220,46 @@ pub(super) fn line_search(
                     report.fallbacks.indefinite += 1;
                     mode = Mode::BackwardEuler;
                     history.clear();
-                    let llt =
-                        backward_euler_factor(system, &mut values, &mass, &mut mu, &mut report)?;
-                    if let Some(v) =
-                        super::curvature::direction(system, &llt, &values, mu, &mass, &mut seed)
-                    {
-                        let moved = super::curvature::search(
-                            model,
+                    let convexified = if after_curvature && model.convexifies() {
+                        convexified_factor(model, system, x, &mut phess, &mut pvalues, &mut report)?
+                    } else {
+                        None
+                    };
+                    if let Some(llt) = convexified {
+                        values.copy_from_slice(&pvalues);
+                        projected_step = true;
+                        llt
+                    } else {
+                        let llt = backward_euler_factor(
                             system,
-                            x,
-                            &mut trial,
-                            (&v.0, v.1),
-                            &gf,
-                            energy,
+                            &mut values,
+                            &mass,
+                            &mut mu,
                             &mut report,
-                        );
-                        if moved {
-                            report.factorizations += 1;
-                            report.curvature_steps += 1;
-                            mode = Mode::Newton;
-                            continue;
+                        )?;
+                        if let Some(v) =
+                            super::curvature::direction(system, &llt, &values, mu, &mass, &mut seed)
+                        {
+                            let moved = super::curvature::search(
+                                model,
+                                system,
+                                x,
+                                &mut trial,
+                                (&v.0, v.1),
+                                &gf,
+                                energy,
+                                &mut report,
+                            );
+                            if moved {
+                                after_curvature = true;
+                                report.factorizations += 1;
+                                report.curvature_steps += 1;
+                                mode = Mode::Newton;
+                                continue;
+                            }
                         }
+                        llt
                     }
-                    llt
                 }
             },
             Mode::BackwardEuler => {
@@ -335,7 +358,12 @@ pub(super) fn line_search(
             }
             (Some(e), Mode::BackwardEuler) => {
                 x.copy_from_slice(&trial);
-                report.backward_euler_steps += 1;
+                after_curvature = false;
+                if projected_step {
+                    report.convexified_steps += 1;
+                } else {
+                    report.backward_euler_steps += 1;
+                }
                 // creeping towards a saddle: the Hessian stays indefinite (we are in backward
                 // Euler because Newton's factorisation failed) while the energy no longer
                 // moves; the symmetric state will not leave by itself, so nudge it
@@ -474,6 +502,37 @@ pub(super) fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
         .map(|_| uniform(seed) * 1e-6 * size)
         .collect();
     system.step(x, &d, 1.0);
+}
+
+/// Assembles and factorises the convexified Hessian at `x` ([`Want::ProjectedHessian`]: each
+/// Gauss point's section tangent projected onto its positive semidefinite part, compression
+/// dropped from the stress term, the moments' term left out) into `values`; `None` where it is
+/// singular (its factorisation counted).
+///
+/// Used for the fallback step that follows a negative-curvature step: the curvature step
+/// leaves the saddle, and a step on this tangent, which keeps every stiffness that is positive,
+/// then moves the whole state down at once, where backward Euler (H + μM) damps every soft mode
+/// alike. Alone, without the curvature steps, it cannot leave a symmetric saddle (its gradient
+/// has no component along the buckling mode) and was measured to stall there.
+fn convexified_factor(
+    model: &dyn ClothModel,
+    system: &FreeSystem,
+    x: &[Vec3],
+    hess: &mut BlockMatrix,
+    values: &mut Vec<f64>,
+    report: &mut SolveReport,
+) -> Result<Option<Llt<usize, f64>>, SolveError> {
+    let ta = Instant::now();
+    model
+        .assemble(x, Want::ProjectedHessian, None, Some(hess))
+        .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+    report.assembly_seconds += ta.elapsed().as_secs_f64();
+    system.values(hess, values);
+    let llt = system.try_factor(values)?;
+    if llt.is_none() {
+        report.factorizations += 1;
+    }
+    Ok(llt)
 }
 
 /// Factorises H + μM, raising μ tenfold until the factorisation succeeds. `values` comes back

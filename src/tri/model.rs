@@ -332,7 +332,7 @@ impl ClothModel for TriModel {
         hess: Option<&mut BlockMatrix>,
     ) -> Result<f64, OutOfDomain> {
         let mut grad = if want == Want::Energy { None } else { grad };
-        let mut hess = if want == Want::Hessian { hess } else { None };
+        let mut hess = if want.hessian() { hess } else { None };
         if let Some(g) = grad.as_deref_mut() {
             g.iter_mut().for_each(|v| *v = [0.0; 3]);
         }

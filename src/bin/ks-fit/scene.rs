@@ -165,7 +165,7 @@ pub struct StudyArgs {
 /// One line describing a solve, for --verbose.
 pub fn describe(r: &kshell::solve::SolveReport) -> String {
     format!(
-        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}, {}, {:.1} ms",
+        "{} iterations ({} backward Euler: {} indefinite, {} ascent, {} stagnation, {} short steps), {} refinement steps ({:?}), residual {:.1e}{}{}{}, {}, {:.1} ms",
         r.iterations,
         r.backward_euler_steps,
         r.fallbacks.indefinite,
@@ -177,6 +177,14 @@ pub fn describe(r: &kshell::solve::SolveReport) -> String {
         r.residual,
         if r.precision_limited { " (round-off floor)" } else { "" },
         if r.saddle_escapes > 0 { format!(", {} saddle escapes", r.saddle_escapes) } else { String::new() },
+        if r.curvature_steps + r.convexified_steps > 0 {
+            format!(
+                ", {} negative-curvature and {} convexified steps",
+                r.curvature_steps, r.convexified_steps
+            )
+        } else {
+            String::new()
+        },
         if r.stable { "stable" } else { "UNSTABLE (a saddle)" },
         r.seconds * 1e3
     )

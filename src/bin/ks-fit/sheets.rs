@@ -372,9 +372,9 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
     if a.verbose {
         let c = run.shape.counts();
         eprintln!(
-            "ks-fit: scene: {} solves ({} cut into sub-steps), {} iterations, {} factorisations, {} backward-Euler and {} negative-curvature steps, {} saddle escapes; {:.2} s assembling, {:.2} s factorising",
+            "ks-fit: scene: {} solves ({} cut into sub-steps), {} iterations, {} factorisations, {} backward-Euler, {} negative-curvature and {} convexified steps, {} saddle escapes; {:.2} s assembling, {:.2} s factorising",
             c.steps, c.cut_steps, c.iterations, c.factorizations, c.backward_euler_steps,
-            c.curvature_steps, c.saddle_escapes, c.assembly_seconds, c.factor_seconds
+            c.curvature_steps, c.convexified_steps, c.saddle_escapes, c.assembly_seconds, c.factor_seconds
         );
     }
     write_outputs(&scene, &out, &run, &choice, t0.elapsed().as_secs_f64())?;
