@@ -179,6 +179,9 @@ impl TensileStrip {
 /// Newton iterations a warm-started strip solve may take before it restarts cold.
 const WARM_ITERATIONS: usize = 12;
 
+/// The largest move of any control-point coordinate a predictor may make, in gauge lengths.
+const MAX_PREDICTED_MOVE: f64 = 1.0;
+
 /// Newton iterations the first cold solve of a point may take before its step is cut into
 /// sub-steps (the whole budget comes last; see [`StripRig::solve_cold`]).
 const FIRST_TRY_ITERATIONS: usize = 40;
@@ -398,12 +401,22 @@ impl StripRig {
     /// step, scaled by the square of the step ratio); or, where there is no tangent (the
     /// first point, an unstable equilibrium), stretched affinely.
     fn predict(&self, previous: &Last, before: Option<&(f64, Vec<Vec3>)>, dl: f64) -> Vec<Vec3> {
+        // a tangent from a nearly singular Hessian (a strip at the edge of buckling) can move
+        // the cage by far more than the strip's size: such a start is worthless (measured: an
+        // energy of 1e241 J and forces that overflow), so the affine stretch replaces it
+        let sane = |slope: &[f64], h: f64| {
+            slope
+                .iter()
+                .all(|v| v.is_finite() && (v * h).abs() <= MAX_PREDICTED_MOVE * self.length)
+        };
         match previous {
-            Some((current, x1, Some(slope))) => {
+            Some((current, x1, Some(slope))) if sane(slope, dl - current) => {
                 let mut x = x1.clone();
                 let step: Vec<f64> = slope.iter().map(|v| v * (dl - current)).collect();
                 self.system.advance(&mut x, &step);
-                if let Some((e0, x0)) = before.filter(|b| b.0 < *current) {
+                if let Some((e0, x0)) =
+                    before.filter(|b| b.0 < *current && sane(slope, current - b.0))
+                {
                     let h = current - e0;
                     let mut back = x1.clone();
                     let step: Vec<f64> = slope.iter().map(|v| -v * h).collect();

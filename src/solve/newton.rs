@@ -447,7 +447,7 @@ fn polish(
         &mut gf,
     );
     let within = b.gnorm <= opts.rtol * b.scale;
-    if !(within || b.gnorm <= b.floor) {
+    if !b.gnorm.is_finite() || !(within || b.gnorm <= b.floor) {
         return None;
     }
     x.copy_from_slice(&trial);
@@ -593,6 +593,18 @@ pub(super) fn linearize(
     } else {
         b.gnorm
     };
+    // forces that overflow compare equal to an infinite round-off floor: never a solution
+    if !b.gnorm.is_finite() {
+        return Err(if it == 0 {
+            SolveError::StartOutOfDomain("its forces are not finite".into())
+        } else {
+            SolveError::NotConverged {
+                iterations: it,
+                residual: report.residual,
+                factorizations: report.factorizations,
+            }
+        });
+    }
     report.iterations = it;
     if it == 0 && report.initial_residual.is_none() {
         report.initial_residual = Some(report.residual);
