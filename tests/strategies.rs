@@ -116,5 +116,55 @@ fn convexified_steps_settle_a_buckling_strip_quickly() {
     let row = kshell::atlas::Case::Compression.run(&method, false);
     assert!(row.converged && row.stable, "{}", row.note);
     assert!(row.note.contains("convexified steps"), "{}", row.note);
-    assert!(row.iterations <= 80, "{} iterations: {}", row.iterations, row.note);
+    assert!(
+        row.iterations <= 80,
+        "{} iterations: {}",
+        row.iterations,
+        row.note
+    );
+}
+
+/// A start whose forces overflow is refused, never returned as converged: an infinite residual
+/// once compared equal to the infinite round-off floor it implied, and a strip whose tangent
+/// predictor had flown off (a nearly singular tangent) came back as an "equilibrium" with a
+/// force of −6e241 N.
+#[test]
+fn a_start_whose_forces_overflow_is_refused() {
+    use kshell::assembly::ShellModel;
+    use kshell::mesh::rectangular_grid;
+    use kshell::solve::{newton, FreeSystem, SolveError};
+    use kshell::subdiv::{BasisOptions, LimitBasis};
+    use std::sync::Arc;
+    let law = OrthotropicStvk {
+        a11: 2.0e8,
+        a22: 1.2e8,
+        a12: 2.0e7,
+        g12: 4.0e6,
+    };
+    let mesh = rectangular_grid(0.05, 0.075, 2, 3);
+    let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
+    let model = ShellModel::new(
+        basis,
+        kshell::scene::warp_direction(0.0),
+        Arc::new(law),
+        1.8e-4,
+        0.1,
+    )
+    .unwrap();
+    let n = model.num_nodes();
+    let rest = model.basis.control_points.clone();
+    let fixed: Vec<bool> = (0..3 * n).map(|d| rest[d / 3][1] < 1e-9).collect();
+    let system = FreeSystem::new(&model, &fixed).unwrap();
+    let mut x: Vec<kshell::Vec3> = rest
+        .iter()
+        .map(|p| {
+            if p[1] < 1e-9 {
+                *p
+            } else {
+                [p[0], p[1], 1e80 * p[1]]
+            }
+        })
+        .collect();
+    let r = newton(&model, &system, &mut x, &NewtonOptions::default());
+    assert!(matches!(r, Err(SolveError::StartOutOfDomain(_))), "{r:?}");
 }
