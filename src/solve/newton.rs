@@ -124,9 +124,9 @@ pub(super) fn line_search(
     let mut gf = vec![0.0; nf];
     let mut d = vec![0.0; nf];
     let mut mode = Mode::Newton;
-    // the convexified Hessian's entries, and whether the last fallback step was along negative
+    // the convexified Hessian (allocated on first use) and its entries, and whether the last fallback step was along negative
     // curvature (the next one is then a step on the convexified Hessian)
-    let mut phess = BlockMatrix::zeros(model.pattern().clone());
+    let mut phess: Option<BlockMatrix> = None;
     let mut pvalues = Vec::new();
     let mut after_curvature = false;
     let mut mu = 0.0f64;
@@ -221,7 +221,9 @@ pub(super) fn line_search(
                     mode = Mode::BackwardEuler;
                     history.clear();
                     let convexified = if after_curvature && model.convexifies() {
-                        convexified_factor(model, system, x, &mut phess, &mut pvalues, &mut report)?
+                        let ph = phess
+                            .get_or_insert_with(|| BlockMatrix::zeros(model.pattern().clone()));
+                        convexified_factor(model, system, x, ph, &mut pvalues, &mut report)?
                     } else {
                         None
                     };
