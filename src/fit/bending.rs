@@ -182,6 +182,7 @@ impl Fitter<'_> {
                 })?;
             self.stats.evaluations += 1;
         }
+        self.keep_bend_rigs(bends, level, rigs);
         self.bending = Some(b);
         let msg = format!(
             "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",

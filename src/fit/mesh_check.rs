@@ -269,6 +269,7 @@ impl Fitter<'_> {
             })
             .collect();
         self.stats.evaluations += runs.len();
+        self.keep_bend_rigs(&data.bend, level, rigs);
         runs.into_iter()
             .collect::<Result<Vec<f64>, _>>()
             .map_err(|source| FitError::Scene {

@@ -325,6 +325,8 @@ struct Fitter<'a> {
     ladder_meshes: bool,
     /// strips already set up, warm
     rigs: HashMap<RigKey, StripRig>,
+    /// cantilevers already set up, warm ([`Fitter::bend_rigs`])
+    bend_cache: HashMap<thickness::BendKey, crate::scene::BendRig>,
     /// node forces already predicted, by strip and parameter bits
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
     /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
@@ -568,6 +570,7 @@ pub fn fit(
         bend_refine: 0,
         ladder_meshes: false,
         rigs: Default::default(),
+        bend_cache: Default::default(),
         predictions: Default::default(),
         yarns: None,
         coupling: coupling::CouplingOutcome::Off,

@@ -21,6 +21,20 @@ use std::time::Instant;
 /// is. Measured on a 2.5 × 75 mm strip draping 62.41° (`ks-fit bend --width 2.5 --overhang 75`,
 /// a11 = 3e7 Pa, τ = 0.2 mm, 100 g/m²): 4 × 12 is 0.57° off 8 × 240, 4 × 24 0.016°, where
 /// square elements took 4 × 120 and 8 × 240 (1.1 s and 4.3 s against 0.09 s and 0.19 s).
+/// A cantilever's cache key: the test's width, overhang and angle, and its mesh.
+pub(super) type BendKey = ([u64; 3], (usize, usize));
+
+fn bend_key(b: &BendTest, mesh: (usize, usize)) -> BendKey {
+    (
+        [
+            b.width.to_bits(),
+            b.overhang.to_bits(),
+            b.angle_deg.to_bits(),
+        ],
+        mesh,
+    )
+}
+
 pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize) {
     let f = level.0 as f64 / 8.0;
     let nx = ((4.0 * f).round() as usize).max(2);
@@ -30,26 +44,58 @@ pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize
 }
 
 impl Fitter<'_> {
-    /// The bend tests' cantilevers on a ladder level, with the current material.
+    /// The bend tests' cantilevers on a ladder level, with the current material's bending:
+    /// from the cache, warm from their last equilibria, or set up; hand them back with
+    /// [`Fitter::keep_bend_rigs`]. Set up anew, a stiff cantilever's first solve is a load
+    /// ramp from the flat strip (measured: the ratio-2e4 fit's 190 mm weft cantilever on
+    /// 16 × 24's mesh, 132 Newton iterations, about 6 s), and each thickness stage and mesh
+    /// check used to pay it again.
     pub(super) fn bend_rigs(
-        &self,
+        &mut self,
         bends: &[BendTest],
         level: (usize, usize),
     ) -> Result<Vec<BendRig>, FitError> {
-        bends
-            .iter()
-            .map(|b| {
-                let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-                bend.yarn_rule = self.opts.yarn_rule; // a bend reads `auto` as the full rule
-                bend.mesh = bend_mesh(self.bend_level(level), b);
-                bend.solver.rtol = super::FIT_RTOL;
-                bend.solver.strategy = self.opts.strategy;
-                BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
+        let mesh_level = self.bend_level(level);
+        let mut out = Vec::with_capacity(bends.len());
+        for b in bends {
+            let mesh = bend_mesh(mesh_level, b);
+            let mut rig = match self.bend_cache.remove(&bend_key(b, mesh)) {
+                Some(rig) => rig,
+                None => {
+                    let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
+                    bend.yarn_rule = self.opts.yarn_rule; // a bend reads `auto` as the full rule
+                    bend.mesh = mesh;
+                    bend.solver.rtol = super::FIT_RTOL;
+                    bend.solver.strategy = self.opts.strategy;
+                    BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
+                        stage: format!("setting up the {}° cantilever", b.angle_deg),
+                        source,
+                    })?
+                }
+            };
+            rig.set_material(&self.law, self.thickness)
+                .map_err(|source| FitError::Scene {
                     stage: format!("setting up the {}° cantilever", b.angle_deg),
                     source,
-                })
-            })
-            .collect()
+                })?;
+            rig.set_bending(self.bending);
+            out.push(rig);
+        }
+        Ok(out)
+    }
+
+    /// Puts the cantilevers of [`Fitter::bend_rigs`] back into the cache, warm.
+    pub(super) fn keep_bend_rigs(
+        &mut self,
+        bends: &[BendTest],
+        level: (usize, usize),
+        rigs: Vec<BendRig>,
+    ) {
+        let mesh_level = self.bend_level(level);
+        for (b, rig) in bends.iter().zip(rigs) {
+            self.bend_cache
+                .insert(bend_key(b, bend_mesh(mesh_level, b)), rig);
+        }
     }
 
     /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
@@ -137,6 +183,7 @@ impl Fitter<'_> {
                 })?;
             self.stats.evaluations += 1;
         }
+        self.keep_bend_rigs(bends, level, rigs);
         self.law = law;
         // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
         if let super::map::A12Rule::Fixed(_) = self.a12 {
