@@ -11,6 +11,7 @@
 mod cantilever;
 mod corner;
 mod drape;
+pub mod elastica;
 pub mod export;
 mod frame;
 pub mod plate;
