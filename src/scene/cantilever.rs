@@ -19,7 +19,9 @@ use std::sync::Arc;
 /// An ASTM D1388 cantilever (self-weight only) set up once for repeated runs with changing
 /// material parameters: the fitter's forward model of a bend test. Each run starts from the
 /// last equilibrium (moved along ∂q/∂k to the new parameters where the last run computed
-/// sensitivities), falling back to a load ramp from the flat strip.
+/// sensitivities), held to `WARM_ITERATIONS` under the full-step strategy; then, for a warp or
+/// weft cut, from the heavy elastica (`elastica_start`); then by a load ramp from the flat
+/// strip.
 pub struct BendRig {
     bend: CantileverBend,
     model: ShellModel,
