@@ -19,8 +19,8 @@ use std::sync::Arc;
 /// An ASTM D1388 cantilever (self-weight only) set up once for repeated runs with changing
 /// material parameters: the fitter's forward model of a bend test. Each run starts from the
 /// last equilibrium (moved along ∂q/∂k to the new parameters where the last run computed
-/// sensitivities), held to `WARM_ITERATIONS` under the full-step strategy; then, for a warp or
-/// weft cut, from the heavy elastica (`elastica_start`); then by a load ramp from the flat
+/// sensitivities), held to `WARM_ITERATIONS` where the elastica can follow; then, for a warp or
+/// weft cut under the full-step strategy, from the heavy elastica (`elastica_start`); then by a load ramp from the flat
 /// strip.
 pub struct BendRig {
     bend: CantileverBend,
@@ -140,8 +140,9 @@ impl BendRig {
         let mut spent_factorizations = 0;
         let full_step = self.bend.solver.strategy == Strategy::FullStep;
         // a warm start that needs more than a few iterations is further off than the elastica
+        // (where there is none, the ramp from flat is dearer than letting the warm start run)
         let warm_opts = NewtonOptions {
-            max_iterations: if full_step {
+            max_iterations: if full_step && elastica_applies(&self.model, &self.bend) {
                 self.bend.solver.max_iterations.min(WARM_ITERATIONS)
             } else {
                 self.bend.solver.max_iterations
@@ -537,11 +538,10 @@ const WARM_ITERATIONS: usize = 20;
 /// 4 × 32: 40.245° from flat, 41.786° from the elastica, both converged); and where the law has
 /// no tangent at rest.
 fn elastica_start(model: &ShellModel, bend: &CantileverBend) -> Option<Vec<Vec3>> {
-    let along_warp = bend.angle_deg == 90.0;
-    if (!along_warp && bend.angle_deg != 0.0) || model.basis.options.boundary != BoundaryRule::Ghost
-    {
+    if !elastica_applies(model, bend) {
         return None;
     }
+    let along_warp = bend.angle_deg == 90.0;
     let per_width = match model.bending() {
         Some(b) => b.at_angle(bend.angle_deg),
         None => {
@@ -564,6 +564,13 @@ fn elastica_start(model: &ShellModel, bend: &CantileverBend) -> Option<Vec<Vec3>
         &model.basis.control_points,
         bend.overhang / bend.mesh.1 as f64,
     ))
+}
+
+/// Whether [`elastica_start`] has a start for this cantilever: a warp or weft cut under the
+/// ghost rule.
+fn elastica_applies(model: &ShellModel, bend: &CantileverBend) -> bool {
+    (bend.angle_deg == 90.0 || bend.angle_deg == 0.0)
+        && model.basis.options.boundary == BoundaryRule::Ghost
 }
 
 /// Newton at the full weight from [`elastica_start`], held to [`ELASTICA_ITERATIONS`]: the
