@@ -2,6 +2,7 @@
 //! computed it and checked by a gradient assembly, it must reach the same equilibrium as the
 //! solve that assembles and factorises once more, within the residual tolerance, for one
 //! Hessian assembly fewer; and the gradient it hands back must be the one at the solution.
+//! With chord steps (`NewtonOptions::chord_from`), the same equilibrium for fewer tangents.
 
 use kshell::assembly::{BlockMatrix, Want};
 use kshell::material::{load_material, OutOfDomain};
@@ -81,6 +82,8 @@ fn a_polished_last_step_reaches_the_same_equilibrium_for_one_tangent_fewer() {
     for polish in [false, true] {
         let opts = NewtonOptions {
             polish,
+            // the polish alone (from √rtol); chords are tested below
+            chord_from: 0.0,
             rtol: 1e-8,
             max_iterations: 300,
             ..NewtonOptions::default()
@@ -140,4 +143,90 @@ fn a_polished_last_step_reaches_the_same_equilibrium_for_one_tangent_fewer() {
         plain.3 + 1 + polished.1.polish_misses,
         "gradient assemblies"
     );
+}
+
+/// The cantilever solved with chords from each reach: (positions, report, Hessian assemblies).
+fn solve_with_chords(chord_from: f64) -> (Vec<Vec3>, kshell::solve::SolveReport, usize) {
+    let (model, system, rest) = cantilever();
+    let opts = NewtonOptions {
+        chord_from,
+        rtol: 1e-8,
+        max_iterations: 300,
+        ..NewtonOptions::default()
+    };
+    let mut x = rest;
+    let (report, lin) = newton_linearized(&model, &system, &mut x, &opts).unwrap();
+    assert!(
+        report.residual <= 1e-8 || report.precision_limited,
+        "{report:?}"
+    );
+    assert!(report.stable && lin.is_some(), "{report:?}");
+    (x, report, model.hessians.load(Relaxed))
+}
+
+#[test]
+fn chord_steps_reach_the_same_equilibrium_for_fewer_tangents() {
+    let (x0, polish_only, tangents0) = solve_with_chords(0.0);
+    assert_eq!(polish_only.chord_steps, 0, "{polish_only:?}");
+    // a reach of 0.5: every Newton step from a relative residual of 0.5 down is finished by
+    // chords where they contract tenfold a step
+    let (x1, chorded, tangents1) = solve_with_chords(0.5);
+    assert!(chorded.chord_steps > 0, "{chorded:?}");
+    assert!(
+        chorded.iterations < polish_only.iterations,
+        "{} Newton iterations with chords against {} without",
+        chorded.iterations,
+        polish_only.iterations
+    );
+    assert!(
+        tangents1 < tangents0,
+        "{tangents1} tangents against {tangents0}"
+    );
+    let size = x0.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (a, b) in x0.iter().flatten().zip(x1.iter().flatten()) {
+        assert!((a - b).abs() <= 1e-9 * size, "{a} against {b}");
+    }
+}
+
+#[test]
+fn the_adjoint_on_a_stale_tangent_is_refined_to_the_solutions_own() {
+    let (model, system, rest) = cantilever();
+    let opts = NewtonOptions {
+        chord_from: 0.5,
+        rtol: 1e-8,
+        max_iterations: 300,
+        ..NewtonOptions::default()
+    };
+    let mut x = rest;
+    let (report, lin) = newton_linearized(&model, &system, &mut x, &opts).unwrap();
+    let stale = lin.unwrap();
+    assert!(report.polished && stale.stale, "{report:?}");
+    let fresh = kshell::solve::Linearization::new(&model, &system, &x).unwrap();
+    assert!(!fresh.stale);
+    // a right-hand side with every DOF loaded: gravity on each node
+    let b: Vec<Vec3> = (0..x.len()).map(|i| [0.1, -0.2 * (i % 3) as f64, 1.0]).collect();
+    let exact = fresh.solve_reduced(&system, &b);
+    let plain = stale.solve_reduced(&system, &b);
+    let refined = stale
+        .solve_at_solution(&model, &system, &x, &b, 1e-10)
+        .unwrap();
+    let size = exact.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let error = |v: &[f64]| {
+        v.iter()
+            .zip(&exact)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+            / size
+    };
+    let (before, after) = (error(&plain), error(&refined));
+    // measured: 1.3e-3 on the stale tangent, 1.6e-7 refined (the differences' √ε)
+    assert!(before > 1e-6, "the stale tangent is off: {before:e}");
+    assert!(after <= 1e-6, "refined: {after:e} (stale alone {before:e})");
+    // H r by differences of the gradient against the fresh tangent's product
+    let mut hb = vec![[0.0; 3]; x.len()];
+    fresh.hessian.mul(&b, &mut hb);
+    let fd = stale.hessian_times(&model, &x, &b).unwrap();
+    let scale = hb.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (a, e) in fd.iter().flatten().zip(hb.iter().flatten()) {
+        assert!((a - e).abs() <= 1e-6 * scale, "{a} against {e}");
+    }
 }

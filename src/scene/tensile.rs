@@ -187,6 +187,10 @@ const MAX_PREDICTED_MOVE: f64 = 1.0;
 /// sub-steps (the whole budget comes last; see [`StripRig::solve_cold`]).
 const FIRST_TRY_ITERATIONS: usize = 40;
 
+/// Relative change of the adjoint solution under which its refinement on a stale tangent
+/// stops ([`crate::solve::Linearization::solve_at_solution`]).
+const ADJOINT_TOL: f64 = 1e-8;
+
 /// The last equilibrium of a run: elongation, positions, and ∂q/∂(elongation) there (`None`
 /// where it was unstable).
 type Last = Option<(f64, Vec<Vec3>, Option<Vec<f64>>)>;
@@ -662,9 +666,17 @@ impl StripRig {
         for &(d, c) in &self.motion {
             r[d / 3][d % 3] += c;
         }
-        let mut hr = vec![[0.0; 3]; x.len()];
-        lin.hessian.mul(&r, &mut hr);
-        let lambda = lin.solve_reduced(&self.system, &hr);
+        // the adjoint K λ = Tᵀ H r at the equilibrium itself: where the tangent is of the point
+        // before a polished or chorded last step, H r and the solve are corrected by products
+        // with the tangent at x (forward differences of the gradient, good to about √ε)
+        let hr = if lin.stale {
+            lin.hessian_times(&self.model, x, &r)?
+        } else {
+            let mut hr = vec![[0.0; 3]; x.len()];
+            lin.hessian.mul(&r, &mut hr);
+            hr
+        };
+        let lambda = lin.solve_at_solution(&self.model, &self.system, x, &hr, ADJOINT_TOL)?;
         let mut dq = Vec::with_capacity(sens.gradient.len());
         let df = sens
             .gradient

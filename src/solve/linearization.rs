@@ -20,6 +20,9 @@ pub struct Linearization {
     pub gradient: Vec<Vec3>,
     pub(super) values: Vec<f64>,
     pub(super) llt: Llt<usize, f64>,
+    /// The tangent is of a point near the solution, not of the solution itself (a polished
+    /// or chorded last step): [`Linearization::solve_at_solution`] corrects for it.
+    pub stale: bool,
 }
 
 impl Linearization {
@@ -39,6 +42,7 @@ impl Linearization {
             gradient,
             values,
             llt,
+            stale: false,
         })
     }
 
@@ -81,6 +85,7 @@ impl Linearization {
                         gradient,
                         values: shifted,
                         llt,
+                        stale: false,
                     },
                     sigma,
                 ));
@@ -112,4 +117,82 @@ impl Linearization {
         );
         d
     }
+
+    /// H(x) v over every DOF, by a forward difference of the gradient about `x`, the
+    /// equilibrium whose gradient this linearisation holds (one gradient assembly: an eighth
+    /// of a Hessian assembly on the shell, measured by `cargo bench --bench shell`). The step
+    /// is √ε of the body's size along v, so the product is good to about √ε relative.
+    pub fn hessian_times(
+        &self,
+        model: &dyn ClothModel,
+        x: &[Vec3],
+        v: &[Vec3],
+    ) -> Result<Vec<Vec3>, SolveError> {
+        let vmax = v.iter().flatten().fold(0.0f64, |m, a| m.max(a.abs()));
+        let mut out = vec![[0.0; 3]; x.len()];
+        if vmax == 0.0 {
+            return Ok(out);
+        }
+        let h = f64::EPSILON.sqrt() * super::newton::size(x).max(f64::MIN_POSITIVE) / vmax;
+        let moved: Vec<Vec3> = x
+            .iter()
+            .zip(v)
+            .map(|(p, d)| std::array::from_fn(|c| p[c] + h * d[c]))
+            .collect();
+        model
+            .assemble(&moved, Want::Gradient, Some(&mut out), None)
+            .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+        for (o, g) in out.iter_mut().zip(&self.gradient) {
+            for c in 0..3 {
+                o[c] = (o[c] - g[c]) / h;
+            }
+        }
+        Ok(out)
+    }
+
+    /// K⁻¹ Tᵀ b with K the tangent at the equilibrium `x` itself: where this linearisation's
+    /// tangent is stale (of the point before a polished or chorded last step), the solve on it
+    /// is refined by products with the tangent at `x` ([`Linearization::hessian_times`]),
+    /// each refinement step cutting the error by about the stale tangent's relative error
+    /// (≤ 1e-2 where chords are allowed), until the correction is under `tol` of the solution
+    /// or after [`ADJOINT_REFINEMENTS`] steps. Without a stale tangent, as
+    /// [`Linearization::solve_reduced`].
+    pub fn solve_at_solution(
+        &self,
+        model: &dyn ClothModel,
+        system: &FreeSystem,
+        x: &[Vec3],
+        b: &[Vec3],
+        tol: f64,
+    ) -> Result<Vec<f64>, SolveError> {
+        let mut lambda = self.solve_reduced(system, b);
+        if !self.stale {
+            return Ok(lambda);
+        }
+        let nf = system.num_free;
+        let rhs = system.reduced(b);
+        let mut t = vec![[0.0; 3]; x.len()];
+        for _ in 0..ADJOINT_REFINEMENTS {
+            // T λ over every DOF: the free DOFs' motion with the slaves following
+            let mut moved = x.to_vec();
+            system.step(&mut moved, &lambda, 1.0);
+            for ((o, a), b) in t.iter_mut().zip(&moved).zip(x) {
+                *o = std::array::from_fn(|c| a[c] - b[c]);
+            }
+            let kl = system.reduced(&self.hessian_times(model, x, &t)?);
+            let mut r: Vec<f64> = rhs.iter().zip(&kl).map(|(a, b)| a - b).collect();
+            self.llt
+                .solve_in_place(MatMut::from_column_major_slice_mut(&mut r, nf, 1));
+            let size = lambda.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            let change = r.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            lambda.iter_mut().zip(&r).for_each(|(a, d)| *a += d);
+            if change <= tol * size {
+                break;
+            }
+        }
+        Ok(lambda)
+    }
 }
+
+/// Most refinement steps of [`Linearization::solve_at_solution`].
+pub const ADJOINT_REFINEMENTS: usize = 3;

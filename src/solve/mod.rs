@@ -87,7 +87,15 @@ pub struct NewtonOptions {
     /// within `rtol` (the tangent of the point before is kept as the linearisation). The
     /// line-search strategies only; the trust region confirms its last step as before.
     pub polish: bool,
+    /// Relative residual under which a polished Newton step may be finished by chord steps on
+    /// its own factorisation (see `newton::polish`); the linearisation handed back is then the
+    /// tangent where the chord began, marked [`Linearization::stale`]. Under √rtol it changes
+    /// nothing.
+    pub chord_from: f64,
 }
+
+/// The default [`NewtonOptions::chord_from`].
+pub const CHORD_FROM: f64 = 5e-2;
 
 /// How [`continuation`] brings on a load, and how each solve is globalised.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -161,6 +169,7 @@ impl Default for NewtonOptions {
             strategy: Strategy::FullStep,
             full_steps: 0,
             polish: true,
+            chord_from: CHORD_FROM,
         }
     }
 }
@@ -234,6 +243,9 @@ pub struct SolveReport {
     pub polished: bool,
     /// Such last steps that missed `rtol` (each one gradient assembly spent; the solve went on).
     pub polish_misses: usize,
+    /// Chord steps after polished Newton steps (each one gradient assembly and one
+    /// back-substitution on the step's own factorisation; not counted as iterations).
+    pub chord_steps: usize,
 }
 
 pub(crate) fn norm(v: &[f64]) -> f64 {

@@ -102,6 +102,7 @@ pub(super) fn trust_region(
                 gradient: grad,
                 values,
                 llt,
+                stale: false,
             });
             return Ok((report, lin));
         }
