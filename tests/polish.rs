@@ -200,11 +200,13 @@ fn the_adjoint_on_a_stale_tangent_is_refined_to_the_solutions_own() {
     let mut x = rest;
     let (report, lin) = newton_linearized(&model, &system, &mut x, &opts).unwrap();
     let stale = lin.unwrap();
-    assert!(report.polished && stale.stale, "{report:?}");
+    assert!(report.polished && stale.refines(), "{report:?}");
     let fresh = kshell::solve::Linearization::new(&model, &system, &x).unwrap();
-    assert!(!fresh.stale);
+    assert!(fresh.stale == 0.0 && !fresh.refines());
     // a right-hand side with every DOF loaded: gravity on each node
-    let b: Vec<Vec3> = (0..x.len()).map(|i| [0.1, -0.2 * (i % 3) as f64, 1.0]).collect();
+    let b: Vec<Vec3> = (0..x.len())
+        .map(|i| [0.1, -0.2 * (i % 3) as f64, 1.0])
+        .collect();
     let exact = fresh.solve_reduced(&system, &b);
     let plain = stale.solve_reduced(&system, &b);
     let refined = stale
@@ -229,4 +231,36 @@ fn the_adjoint_on_a_stale_tangent_is_refined_to_the_solutions_own() {
     for (a, e) in fd.iter().flatten().zip(hb.iter().flatten()) {
         assert!((a - e).abs() <= 1e-6 * scale, "{a} against {e}");
     }
+}
+
+/// The stability certificate of a chorded solve (`Linearization::certifies`): a positive
+/// definite tangent at rest certifies a state just off rest, and refuses a flat sheet
+/// compressed past buckling (indefinite: a factorisation there fails) and a state so far
+/// away that its tangent is unknown to it.
+#[test]
+fn a_nearby_tangent_certifies_stability_and_refuses_a_saddle() {
+    let cotton = load_material(std::path::Path::new("examples/materials/cotton.toml")).unwrap();
+    let mat = TriMaterial::equivalent(TriKind::StvkDs, &cotton, 0.005, 100.0).unwrap();
+    let inner = TriModel::new(TriGrid::rectangle(0.06, 0.03, 6, 3), mat, 0.0);
+    let rest = inner.grid.positions();
+    let n = inner.num_nodes();
+    // both short ends clamped
+    let fixed: Vec<bool> = (0..3 * n)
+        .map(|d| rest[d / 3][0] < 1e-9 || rest[d / 3][0] > 0.06 - 1e-9)
+        .collect();
+    let system = FreeSystem::new(&inner, &fixed).unwrap();
+    let at_rest = kshell::solve::Linearization::new(&inner, &system, &rest).unwrap();
+    let scaled = |s: f64| -> Vec<Vec3> { rest.iter().map(|p| [s * p[0], p[1], p[2]]).collect() };
+    // the state it was factorised at, and one stretched by 1e-6
+    assert!(at_rest.certifies(&inner, &system, &rest).unwrap());
+    assert!(at_rest
+        .certifies(&inner, &system, &scaled(1.0 + 1e-6))
+        .unwrap());
+    // compressed by 5 %, flat: a saddle (its own tangent does not factorise)
+    let compressed = scaled(0.95);
+    assert!(
+        kshell::solve::Linearization::new(&inner, &system, &compressed).is_err(),
+        "the compressed flat sheet is a saddle"
+    );
+    assert!(!at_rest.certifies(&inner, &system, &compressed).unwrap());
 }

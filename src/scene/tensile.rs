@@ -666,10 +666,10 @@ impl StripRig {
         for &(d, c) in &self.motion {
             r[d / 3][d % 3] += c;
         }
-        // the adjoint K λ = Tᵀ H r at the equilibrium itself: where the tangent is of the point
-        // before a polished or chorded last step, H r and the solve are corrected by products
+        // the adjoint K λ = Tᵀ H r at the equilibrium itself: where the tangent is of a point
+        // before a chorded last step, H r and the solve are corrected by products
         // with the tangent at x (forward differences of the gradient, good to about √ε)
-        let hr = if lin.stale {
+        let hr = if lin.refines() {
             lin.hessian_times(&self.model, x, &r)?
         } else {
             let mut hr = vec![[0.0; 3]; x.len()];

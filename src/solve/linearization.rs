@@ -20,9 +20,10 @@ pub struct Linearization {
     pub gradient: Vec<Vec3>,
     pub(super) values: Vec<f64>,
     pub(super) llt: Llt<usize, f64>,
-    /// The tangent is of a point near the solution, not of the solution itself (a polished
-    /// or chorded last step): [`Linearization::solve_at_solution`] corrects for it.
-    pub stale: bool,
+    /// The relative residual of the state whose tangent this is: 0 for the solution's own;
+    /// the start of a polished or chorded last step's otherwise. From [`REFINE_FROM`] on,
+    /// [`Linearization::solve_at_solution`] corrects for it.
+    pub stale: f64,
 }
 
 impl Linearization {
@@ -42,7 +43,7 @@ impl Linearization {
             gradient,
             values,
             llt,
-            stale: false,
+            stale: 0.0,
         })
     }
 
@@ -85,7 +86,7 @@ impl Linearization {
                         gradient,
                         values: shifted,
                         llt,
-                        stale: false,
+                        stale: 0.0,
                     },
                     sigma,
                 ));
@@ -119,39 +120,43 @@ impl Linearization {
     }
 
     /// H(x) v over every DOF, by a forward difference of the gradient about `x`, the
-    /// equilibrium whose gradient this linearisation holds (one gradient assembly: an eighth
-    /// of a Hessian assembly on the shell, measured by `cargo bench --bench shell`). The step
-    /// is √ε of the body's size along v, so the product is good to about √ε relative.
+    /// equilibrium whose gradient this linearisation holds ([`hessian_times`]).
     pub fn hessian_times(
         &self,
         model: &dyn ClothModel,
         x: &[Vec3],
         v: &[Vec3],
     ) -> Result<Vec<Vec3>, SolveError> {
-        let vmax = v.iter().flatten().fold(0.0f64, |m, a| m.max(a.abs()));
-        let mut out = vec![[0.0; 3]; x.len()];
-        if vmax == 0.0 {
-            return Ok(out);
-        }
-        let h = f64::EPSILON.sqrt() * super::newton::size(x).max(f64::MIN_POSITIVE) / vmax;
-        let moved: Vec<Vec3> = x
-            .iter()
-            .zip(v)
-            .map(|(p, d)| std::array::from_fn(|c| p[c] + h * d[c]))
-            .collect();
+        hessian_times(model, x, &self.gradient, v)
+    }
+
+    /// Whether this (positive definite) tangent certifies the tangent at `x`, a nearby state
+    /// of the same system, as positive definite without assembling it: the power estimate of
+    /// the spectral radius of K₀⁻¹(K − K₀) under a bound (one gradient assembly and one
+    /// back-substitution a step). Conservative: a tangent that stiffened a lot fails too.
+    pub fn certifies(
+        &self,
+        model: &dyn ClothModel,
+        system: &FreeSystem,
+        x: &[Vec3],
+    ) -> Result<bool, SolveError> {
+        let mut grad = vec![[0.0; 3]; model.num_nodes()];
         model
-            .assemble(&moved, Want::Gradient, Some(&mut out), None)
+            .assemble(x, Want::Gradient, Some(&mut grad), None)
             .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-        for (o, g) in out.iter_mut().zip(&self.gradient) {
-            for c in 0..3 {
-                o[c] = (o[c] - g[c]) / h;
-            }
-        }
-        Ok(out)
+        Ok(super::chord::certified(model, system, x, &grad, &self.llt))
+    }
+
+    /// Whether the tangent is far enough from the solution's for
+    /// [`Linearization::solve_at_solution`] to refine on it: from a relative residual of
+    /// [`REFINE_FROM`] (a polished step from under it leaves sensitivities good to about 1e-5,
+    /// measured on the bundled cotton's fit against fresh tangents).
+    pub fn refines(&self) -> bool {
+        self.stale > REFINE_FROM
     }
 
     /// K⁻¹ Tᵀ b with K the tangent at the equilibrium `x` itself: where this linearisation's
-    /// tangent is stale (of the point before a polished or chorded last step), the solve on it
+    /// tangent is stale ([`Linearization::refines`]), the solve on it
     /// is refined by products with the tangent at `x` ([`Linearization::hessian_times`]),
     /// each refinement step cutting the error by about the stale tangent's relative error
     /// (≤ 1e-2 where chords are allowed), until the correction is under `tol` of the solution
@@ -166,7 +171,7 @@ impl Linearization {
         tol: f64,
     ) -> Result<Vec<f64>, SolveError> {
         let mut lambda = self.solve_reduced(system, b);
-        if !self.stale {
+        if !self.refines() {
             return Ok(lambda);
         }
         let nf = system.num_free;
@@ -194,5 +199,40 @@ impl Linearization {
     }
 }
 
+/// The staleness from which [`Linearization::solve_at_solution`] refines.
+pub const REFINE_FROM: f64 = 1e-4;
+
 /// Most refinement steps of [`Linearization::solve_at_solution`].
 pub const ADJOINT_REFINEMENTS: usize = 3;
+
+/// H(x) v over every DOF, by a forward difference of the gradient `grad` at `x` (one gradient
+/// assembly: an eighth of a Hessian assembly on the shell, measured by `cargo bench --bench
+/// shell`). The step is √ε of the body's size along v, so the product is good to about √ε
+/// relative.
+pub(super) fn hessian_times(
+    model: &dyn ClothModel,
+    x: &[Vec3],
+    grad: &[Vec3],
+    v: &[Vec3],
+) -> Result<Vec<Vec3>, SolveError> {
+    let vmax = v.iter().flatten().fold(0.0f64, |m, a| m.max(a.abs()));
+    let mut out = vec![[0.0; 3]; x.len()];
+    if vmax == 0.0 {
+        return Ok(out);
+    }
+    let h = f64::EPSILON.sqrt() * super::newton::size(x).max(f64::MIN_POSITIVE) / vmax;
+    let moved: Vec<Vec3> = x
+        .iter()
+        .zip(v)
+        .map(|(p, d)| std::array::from_fn(|c| p[c] + h * d[c]))
+        .collect();
+    model
+        .assemble(&moved, Want::Gradient, Some(&mut out), None)
+        .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
+    for (o, g) in out.iter_mut().zip(grad) {
+        for c in 0..3 {
+            o[c] = (o[c] - g[c]) / h;
+        }
+    }
+    Ok(out)
+}

@@ -15,6 +15,7 @@
 //! known to ε‖x‖∞; thin shells, whose stiffness spans ten decades, reach this floor first and
 //! the report says so).
 
+mod chord;
 mod continuation;
 mod curvature;
 pub mod dump;

@@ -183,7 +183,7 @@ pub(super) fn line_search(
                 gradient: grad,
                 values,
                 llt,
-                stale: false,
+                stale: 0.0,
             });
             return Ok((report, lin));
         }
@@ -288,18 +288,28 @@ pub(super) fn line_search(
             report.refinement_steps += rep.steps;
         }
         report.factor_seconds += tf.elapsed().as_secs_f64();
-        if own_hessian && opts.polish && gnorm <= polish_from(opts) * scale {
-            match polish(
+        // chords from beyond √rtol only where Newton is converging: the solve's first step (a
+        // warm start or a predictor), or after a step that cut the residual tenfold; a state
+        // crawling through a wrinkle pattern would spend gradient assemblies on chords that
+        // miss at every step (measured: the ratio-2e4 fit 110 → 142 s with chords everywhere)
+        let converging = it == 0 || history.last().is_some_and(|&(_, r)| gnorm <= 0.1 * r);
+        let reach = if converging {
+            super::chord::polish_from(opts)
+        } else {
+            opts.rtol.sqrt()
+        };
+        if own_hessian && opts.polish && gnorm <= reach * scale {
+            match super::chord::polish(
                 model,
                 system,
-                (x, energy, gnorm),
+                (x, energy, gnorm, scale),
                 &d,
                 &llt,
                 opts,
                 (&external, external_scale),
                 &values,
             ) {
-                Polish::Converged(done) => {
+                super::chord::Polish::Converged(done) => {
                     report.iterations = it + 1;
                     report.polished = true;
                     report.chord_steps += done.chord_steps;
@@ -315,23 +325,24 @@ pub(super) fn line_search(
                             gradient: done.gradient,
                             values,
                             llt,
-                            stale: true,
+                            stale: if scale > 0.0 { gnorm / scale } else { 0.0 },
                         }),
                     ));
                 }
-                Polish::Moved {
+                super::chord::Polish::Moved {
                     energy,
                     chord_steps,
                 } => {
-                    // the steps did not reach rtol but went down in energy and residual:
-                    // they stand as this iteration's step
+                    // the steps did not reach rtol but went down in energy and residual, or
+                    // reached it where the tangent is not certified: they stand as this
+                    // iteration's step, and the next linearises there
                     report.polish_misses += 1;
                     report.chord_steps += chord_steps;
                     history.push((energy, gnorm));
                     be_energy.clear();
                     continue;
                 }
-                Polish::Missed { chord_steps } => {
+                super::chord::Polish::Missed { chord_steps } => {
                     report.polish_misses += 1;
                     report.chord_steps += chord_steps;
                 }
@@ -432,136 +443,6 @@ pub(super) fn line_search(
         residual: report.residual,
         factorizations: report.factorizations,
     })
-}
-
-/// The relative residual under which a Newton step is polished ([`polish`]): √rtol, the
-/// point from which one quadratically convergent step reaches rtol, raised to
-/// `chord_from` where chord steps can finish the job.
-fn polish_from(opts: &NewtonOptions) -> f64 {
-    opts.rtol.sqrt().max(opts.chord_from)
-}
-
-/// Most chord steps after a polished Newton step.
-const CHORD_STEPS: usize = 5;
-
-/// A chord step must cut the residual at least this much, or the chord is abandoned.
-const CHORD_RATE: f64 = 0.1;
-
-/// The last step of a converging Newton solve, taken whole on the factorisation that computed
-/// it and checked by one gradient assembly instead of a further Hessian assembly and
-/// factorisation: from a relative residual r ≤ √rtol a Newton step leaves about r² (quadratic
-/// convergence), so the equilibrium usually needs no new tangent. From a larger r (up to
-/// `chord_from`) the step leaves about r², and up to [`CHORD_STEPS`] chord steps on the same
-/// factorisation (each one gradient assembly and one back-substitution, each cutting the
-/// residual by about the distance to the solution) finish where a second Newton iteration
-/// would have assembled and factorised the tangent again. Where the steps land within `rtol`
-/// (or the round-off floor, measured with the diagonal of the tangent it came from), `x`
-/// moves there and what it found there comes back; the caller keeps the tangent at the point
-/// before as the linearisation, which is first-order accurate in the step (sensitivities and
-/// predictors to about r). Otherwise, where the best point reached is lower in energy and in
-/// residual than `x`, `x` moves there and the Newton iteration goes on from it; else `x` is
-/// left as it was.
-#[allow(clippy::too_many_arguments)]
-fn polish(
-    model: &dyn ClothModel,
-    system: &FreeSystem,
-    (x, energy0, gnorm0): (&mut [Vec3], f64, f64),
-    d: &[f64],
-    llt: &Llt<usize, f64>,
-    opts: &NewtonOptions,
-    (external, external_scale): (&[Vec3], f64),
-    values: &[f64],
-) -> Polish {
-    let nf = system.num_free;
-    let mut trial = x.to_vec();
-    system.step(&mut trial, d, 1.0);
-    let mut grad = vec![[0.0; 3]; model.num_nodes()];
-    let mut gf = vec![0.0; nf];
-    let mut best: Option<(Vec<Vec3>, f64, f64)> = None;
-    let mut last = gnorm0;
-    let mut taken = 0;
-    for chord in 0..=CHORD_STEPS {
-        let Some(energy) = model
-            .assemble(&trial, Want::Gradient, Some(&mut grad), None)
-            .ok()
-            .filter(|e| e.is_finite())
-        else {
-            break;
-        };
-        let b = balance(
-            system,
-            &trial,
-            &grad,
-            external,
-            external_scale,
-            values,
-            &mut gf,
-        );
-        if !b.gnorm.is_finite() {
-            break;
-        }
-        let within = b.gnorm <= opts.rtol * b.scale;
-        if within || b.gnorm <= b.floor {
-            x.copy_from_slice(&trial);
-            return Polish::Converged(Polished {
-                energy,
-                residual: if b.scale > 0.0 {
-                    b.gnorm / b.scale
-                } else {
-                    b.gnorm
-                },
-                at_floor: !within,
-                gradient: grad,
-                chord_steps: chord,
-            });
-        }
-        if b.gnorm < gnorm0 && energy <= energy0 {
-            best = Some((trial.clone(), energy, b.gnorm));
-        }
-        // the chord converges linearly: where it does not contract fast, a new tangent pays
-        if chord == CHORD_STEPS || b.gnorm > CHORD_RATE * last {
-            break;
-        }
-        last = b.gnorm;
-        taken += 1;
-        let mut step: Vec<f64> = gf.iter().map(|g| -g).collect();
-        llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut step, nf, 1));
-        system.step(&mut trial, &step, 1.0);
-    }
-    let steps = taken;
-    match best {
-        Some((b, energy, _)) => {
-            x.copy_from_slice(&b);
-            Polish::Moved {
-                energy,
-                chord_steps: steps,
-            }
-        }
-        None => Polish::Missed { chord_steps: steps },
-    }
-}
-
-/// What a polish came to.
-enum Polish {
-    /// within rtol (or the round-off floor)
-    Converged(Polished),
-    /// not within rtol, but `x` moved to a point lower in energy and residual
-    Moved { energy: f64, chord_steps: usize },
-    /// `x` left as it was
-    Missed { chord_steps: usize },
-}
-
-/// Where a polished step landed.
-struct Polished {
-    energy: f64,
-    /// relative residual
-    residual: f64,
-    /// within the round-off floor rather than `rtol`
-    at_floor: bool,
-    /// over every DOF
-    gradient: Vec<Vec3>,
-    /// chord steps taken after the Newton step
-    chord_steps: usize,
 }
 
 /// The diagonal of the bounding box of `x`.

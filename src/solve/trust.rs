@@ -102,7 +102,7 @@ pub(super) fn trust_region(
                 gradient: grad,
                 values,
                 llt,
-                stale: false,
+                stale: 0.0,
             });
             return Ok((report, lin));
         }
