@@ -26,17 +26,28 @@ pub(super) enum StageMode {
 }
 
 impl Fitter<'_> {
-    /// Bootstrap fit of one direction from a start p on the homogeneous strip over the
-    /// stage's curves; returns (p, mean relative error, shape error).
-    fn bootstrap_fit(
+    /// Bootstrap fits of one direction from several starts on the homogeneous strip over the
+    /// stage's curves, side by side (independent fits; the first start with the least mean
+    /// relative error wins, as one after another): (p, mean relative error, shape error).
+    fn bootstrap_best(
         &mut self,
         map: StageMap,
         curves: &[usize],
-        p0: Vec<f64>,
+        starts: Vec<Vec<f64>>,
     ) -> Option<(Vec<f64>, f64, f64)> {
-        let fit = homogeneous_fit(&self.prep, &self.law, self.thickness, map, curves, p0, None)?;
-        self.stats.bootstrap_evaluations += fit.evaluations;
-        Some((fit.p, fit.error, fit.shape))
+        let (prep, law, tau) = (&self.prep, &self.law, self.thickness);
+        let fits: Vec<_> = starts
+            .into_par_iter()
+            .map(|p0| homogeneous_fit(prep, law, tau, map, curves, p0, None))
+            .collect();
+        let mut best: Option<(Vec<f64>, f64, f64)> = None;
+        for fit in fits.into_iter().flatten() {
+            self.stats.bootstrap_evaluations += fit.evaluations;
+            if best.as_ref().is_none_or(|b| fit.error < b.1) {
+                best = Some((fit.p, fit.error, fit.shape));
+            }
+        }
+        best
     }
 
     /// Degree choice and initial guess of one direction on the homogeneous strip. Degree
@@ -55,20 +66,17 @@ impl Fitter<'_> {
                 _ => secant,
             }
         };
-        let mut best: Option<(Vec<f64>, f64, f64)> = None;
-        for beta in [1e-3, 1.0, 5.0] {
-            let p = if map.c_known {
-                vec![beta_to_var(beta)]
-            } else {
-                vec![c0.ln(), beta_to_var(beta)]
-            };
-            if let Some(r) = self.bootstrap_fit(map, curves, p) {
-                if best.as_ref().is_none_or(|b| r.1 < b.1) {
-                    best = Some(r);
+        let starts = [1e-3, 1.0, 5.0]
+            .iter()
+            .map(|&beta| {
+                if map.c_known {
+                    vec![beta_to_var(beta)]
+                } else {
+                    vec![c0.ln(), beta_to_var(beta)]
                 }
-            }
-        }
-        let Some(mut chosen) = best else {
+            })
+            .collect();
+        let Some(mut chosen) = self.bootstrap_best(map, curves, starts) else {
             return (map.encode(&self.law), Vec::new());
         };
         let mut all = vec![chosen.0.clone()];
@@ -90,20 +98,18 @@ impl Fitter<'_> {
                 break;
             }
             let prev = all.last().expect("degree 1").clone();
-            let mut best: Option<(Vec<f64>, f64, f64)> = None;
+            let mut starts = Vec::new();
             for mu_new in [0.0, 0.3, -0.3, 0.7] {
                 for beta_new in [0.5, 2.0, 4.0, 5.5] {
                     let mut p = map.raise(&prev, beta_new);
                     let o = usize::from(!map.c_known);
                     p[o + degree - 2] = mu_new;
-                    if let Some(r) = self.bootstrap_fit(map, curves, p) {
-                        if best.as_ref().is_none_or(|b| r.1 < b.1) {
-                            best = Some(r);
-                        }
-                    }
+                    starts.push(p);
                 }
             }
-            let Some(candidate) = best else { break };
+            let Some(candidate) = self.bootstrap_best(map, curves, starts) else {
+                break;
+            };
             if fixed.is_none() {
                 let mut law = self.law.clone();
                 map.decode(&candidate.0, &mut law);

@@ -188,8 +188,9 @@ const MAX_PREDICTED_MOVE: f64 = 1.0;
 const FIRST_TRY_ITERATIONS: usize = 40;
 
 /// Relative change of the adjoint solution under which its refinement on a stale tangent
-/// stops ([`crate::solve::Linearization::solve_at_solution`]).
-const ADJOINT_TOL: f64 = 1e-8;
+/// stops ([`crate::solve::Linearization::solve_at_solution`]): above the forward differences'
+/// own accuracy (about √ε), under which the refinement stagnates.
+const ADJOINT_TOL: f64 = 1e-7;
 
 /// The last equilibrium of a run: elongation, positions, and ∂q/∂(elongation) there (`None`
 /// where it was unstable).
@@ -362,13 +363,16 @@ impl StripRig {
                 .sum();
             let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
             let dforce = if sensitivities {
-                let (df, dq) =
+                let (df, dq, fresh) =
                     self.force_sensitivities(&x, lin)
                         .map_err(|source| SceneError::Solve {
                             stage: format!("sensitivities at elongation {:.4} mm", dl * 1e3),
                             source,
                         })?;
                 self.tangents[i] = Some((self.params.clone(), dq));
+                // a tangent factorised again for the sensitivities counts as an iteration
+                report.iterations += usize::from(fresh);
+                report.factorizations += usize::from(fresh);
                 df
             } else {
                 self.tangents[i] = None;
@@ -651,10 +655,10 @@ impl StripRig {
         &self,
         x: &[Vec3],
         lin: Option<crate::solve::Linearization>,
-    ) -> Result<(Vec<f64>, Vec<Vec<f64>>), SolveError> {
+    ) -> Result<(Vec<f64>, Vec<Vec<f64>>, bool), SolveError> {
         // an equilibrium that ended unstable (a wrinkling strip's saddle) gets the
         // sensitivities of a regularised tangent; the point's report says it is not stable
-        let lin = match lin {
+        let mut lin = match lin {
             Some(l) => l,
             None => crate::solve::Linearization::new_regularized(&self.model, &self.system, x)?.0,
         };
@@ -669,6 +673,9 @@ impl StripRig {
         // the adjoint K λ = Tᵀ H r at the equilibrium itself: where the tangent is of a point
         // before a chorded last step, H r and the solve are corrected by products
         // with the tangent at x (forward differences of the gradient, good to about √ε)
+        // with the tangent at x (forward differences of the gradient, good to about √ε); where
+        // the stale tangent is too far off to refine on, the solution's own is factorised
+        // (counted as an iteration of the point)
         let hr = if lin.refines() {
             lin.hessian_times(&self.model, x, &r)?
         } else {
@@ -676,7 +683,17 @@ impl StripRig {
             lin.hessian.mul(&r, &mut hr);
             hr
         };
-        let lambda = lin.solve_at_solution(&self.model, &self.system, x, &hr, ADJOINT_TOL)?;
+        let mut fresh = false;
+        let lambda = match lin.solve_at_solution(&self.model, &self.system, x, &hr, ADJOINT_TOL)? {
+            Some(l) => l,
+            None => {
+                lin = crate::solve::Linearization::new(&self.model, &self.system, x)?;
+                fresh = true;
+                let mut hr = vec![[0.0; 3]; x.len()];
+                lin.hessian.mul(&r, &mut hr);
+                lin.solve_reduced(&self.system, &hr)
+            }
+        };
         let mut dq = Vec::with_capacity(sens.gradient.len());
         let df = sens
             .gradient
@@ -703,6 +720,6 @@ impl StripRig {
                 direct - lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
             })
             .collect();
-        Ok((df, dq))
+        Ok((df, dq, fresh))
     }
 }

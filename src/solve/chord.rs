@@ -175,7 +175,6 @@ pub(super) fn certified(
         }
         v.iter_mut().for_each(|a| *a /= vn);
     }
-    let mut full = vec![[0.0; 3]; x.len()];
     let mut radius = f64::INFINITY;
     for _ in 0..CERTIFICATE_STEPS {
         let vn = super::norm(&v);
@@ -184,12 +183,7 @@ pub(super) fn certified(
         }
         v.iter_mut().for_each(|a| *a /= vn);
         // T v over every DOF (the slaves follow their masters)
-        let mut moved = x.to_vec();
-        system.step(&mut moved, &v, 1.0);
-        for ((o, a), b) in full.iter_mut().zip(&moved).zip(x) {
-            *o = std::array::from_fn(|c| a[c] - b[c]);
-        }
-        let Ok(kv) = hessian_times(model, x, grad, &full) else {
+        let Ok(kv) = hessian_times(model, x, grad, &system.expand(&v)) else {
             return false;
         };
         let mut u = system.reduced(&kv);

@@ -149,18 +149,21 @@ impl Linearization {
 
     /// Whether the tangent is far enough from the solution's for
     /// [`Linearization::solve_at_solution`] to refine on it: from a relative residual of
-    /// [`REFINE_FROM`] (a polished step from under it leaves sensitivities good to about 1e-5,
-    /// measured on the bundled cotton's fit against fresh tangents).
+    /// [`REFINE_FROM`] (a tangent that stale leaves sensitivities off by about its staleness:
+    /// measured on the bundled cotton's fit against fresh tangents, up to 1e-5 from polished
+    /// steps under 1e-4, 1e-3–1e-2 from chords under 5e-2; `tests/sensitivities.rs` asks for
+    /// 1e-5 and saw 2.4e-5 from a tangent under 1e-4 stale).
     pub fn refines(&self) -> bool {
         self.stale > REFINE_FROM
     }
 
     /// K⁻¹ Tᵀ b with K the tangent at the equilibrium `x` itself: where this linearisation's
-    /// tangent is stale ([`Linearization::refines`]), the solve on it
-    /// is refined by products with the tangent at `x` ([`Linearization::hessian_times`]),
-    /// each refinement step cutting the error by about the stale tangent's relative error
-    /// (≤ 1e-2 where chords are allowed), until the correction is under `tol` of the solution
-    /// or after [`ADJOINT_REFINEMENTS`] steps. Without a stale tangent, as
+    /// tangent is stale ([`Linearization::refines`]), the solve on it is refined by products
+    /// with the tangent at `x` ([`Linearization::hessian_times`]), each refinement step cutting
+    /// the error by about the stale tangent's relative error, until the correction is under
+    /// `tol` of the solution. `None` where that takes more than [`ADJOINT_REFINEMENTS`] steps or
+    /// a step does not halve the correction (the tangent too far off to precondition: the
+    /// caller factorises the solution's own). Without a stale tangent, as
     /// [`Linearization::solve_reduced`].
     pub fn solve_at_solution(
         &self,
@@ -169,41 +172,39 @@ impl Linearization {
         x: &[Vec3],
         b: &[Vec3],
         tol: f64,
-    ) -> Result<Vec<f64>, SolveError> {
+    ) -> Result<Option<Vec<f64>>, SolveError> {
         let mut lambda = self.solve_reduced(system, b);
         if !self.refines() {
-            return Ok(lambda);
+            return Ok(Some(lambda));
         }
         let nf = system.num_free;
         let rhs = system.reduced(b);
-        let mut t = vec![[0.0; 3]; x.len()];
+        let mut last = f64::INFINITY;
         for _ in 0..ADJOINT_REFINEMENTS {
-            // T λ over every DOF: the free DOFs' motion with the slaves following
-            let mut moved = x.to_vec();
-            system.step(&mut moved, &lambda, 1.0);
-            for ((o, a), b) in t.iter_mut().zip(&moved).zip(x) {
-                *o = std::array::from_fn(|c| a[c] - b[c]);
-            }
-            let kl = system.reduced(&self.hessian_times(model, x, &t)?);
+            let kl = system.reduced(&self.hessian_times(model, x, &system.expand(&lambda))?);
             let mut r: Vec<f64> = rhs.iter().zip(&kl).map(|(a, b)| a - b).collect();
             self.llt
                 .solve_in_place(MatMut::from_column_major_slice_mut(&mut r, nf, 1));
             let size = lambda.iter().fold(0.0f64, |m, a| m.max(a.abs()));
             let change = r.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            if !change.is_finite() || change > 0.5 * last {
+                return Ok(None);
+            }
             lambda.iter_mut().zip(&r).for_each(|(a, d)| *a += d);
             if change <= tol * size {
-                break;
+                return Ok(Some(lambda));
             }
+            last = change;
         }
-        Ok(lambda)
+        Ok(None)
     }
 }
 
 /// The staleness from which [`Linearization::solve_at_solution`] refines.
-pub const REFINE_FROM: f64 = 1e-4;
+pub const REFINE_FROM: f64 = 1e-6;
 
 /// Most refinement steps of [`Linearization::solve_at_solution`].
-pub const ADJOINT_REFINEMENTS: usize = 3;
+pub const ADJOINT_REFINEMENTS: usize = 8;
 
 /// H(x) v over every DOF, by a forward difference of the gradient `grad` at `x` (one gradient
 /// assembly: an eighth of a Hessian assembly on the shell, measured by `cargo bench --bench

@@ -201,6 +201,16 @@ impl FreeSystem {
         }
     }
 
+    /// T d over every DOF: the free DOFs' values, each slave's combination of its masters', the
+    /// clamped DOFs' zero (a motion, not a position: no offsets).
+    pub(super) fn expand(&self, d: &[f64]) -> Vec<Vec3> {
+        let mut out = vec![[0.0; 3]; self.map.len() / 3];
+        for (dof, m) in self.map.iter().enumerate() {
+            out[dof / 3][dof % 3] = m.iter().map(|&(f, c)| c * d[f as usize]).sum();
+        }
+        out
+    }
+
     /// x ← x + α T d (free DOFs moved, slaves re-derived).
     pub(super) fn step(&self, x: &mut [Vec3], d: &[f64], alpha: f64) {
         for (dof, &fi) in self.free_index.iter().enumerate() {
