@@ -251,13 +251,8 @@ impl BendRig {
                 .iter()
                 .map(|dg| {
                     let reduced = self.system.reduced(dg);
-                    // ∂q/∂k = −K⁻¹ Tᵀ ∂g/∂k, kept for the next run's start
-                    dq.push(
-                        lin.solve_reduced(&self.system, dg)
-                            .iter()
-                            .map(|v| -v)
-                            .collect(),
-                    );
+                    // ∂q/∂k, kept for the next run's start
+                    dq.push(lin.parameter_tangent(&self.system, dg));
                     -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>() * 180.0
                         / std::f64::consts::PI
                 })

@@ -130,6 +130,14 @@ impl Linearization {
         hessian_times(model, x, &self.gradient, v)
     }
 
+    /// −K⁻¹ Tᵀ g for a full-length g: the equilibrium's parameter tangent ∂q/∂k where g is
+    /// ∂(gradient)/∂k (the next run's predictor).
+    pub fn parameter_tangent(&self, system: &FreeSystem, g: &[Vec3]) -> Vec<f64> {
+        let mut d = self.solve_reduced(system, g);
+        d.iter_mut().for_each(|v| *v = -*v);
+        d
+    }
+
     /// Whether this (positive definite) tangent certifies the tangent at `x`, a nearby state
     /// of the same system, as positive definite without assembling it: the power estimate of
     /// the spectral radius of K₀⁻¹(K − K₀) under a bound (one gradient assembly and one

@@ -95,13 +95,8 @@ impl StripRig {
                 }
                 let direct: f64 = self.motion.iter().map(|&(d, c)| c * dg[d / 3][d % 3]).sum();
                 let reduced = self.system.reduced(dg);
-                // ∂q/∂k = −K⁻¹ Tᵀ ∂g/∂k, kept for the next run's predictor
-                dq.push(
-                    lin.solve_reduced(&self.system, dg)
-                        .iter()
-                        .map(|v| -v)
-                        .collect(),
-                );
+                // ∂q/∂k, kept for the next run's predictor
+                dq.push(lin.parameter_tangent(&self.system, dg));
                 direct - lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>()
             })
             .collect();
