@@ -85,8 +85,6 @@ impl Fitter<'_> {
         t.mesh = strip_mesh(level, strip.width, strip.length);
         t.grading = self.opts.grading;
         t.yarn_rule = self.yarns();
-        // thin off-axis strips wrinkle: allow the backward-Euler fallback time to settle them
-        t.solver.max_iterations = 500;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
         t.solver.strategy = self.opts.strategy;

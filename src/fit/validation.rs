@@ -99,7 +99,6 @@ impl Fitter<'_> {
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.opts.grading;
             t.yarn_rule = self.yarns();
-            t.solver.max_iterations = 500;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {

@@ -24,7 +24,7 @@ pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMEN
 pub use corner::{CornerPull, PullPoint};
 pub use drape::{Drape, DrapeShape};
 pub use frame::{Deformed, FramePoint, PictureFrame};
-pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING};
+pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING, STRIP_ITERATIONS};
 
 use crate::assembly::{ModelError, ShellModel, YarnRule};
 use crate::material::FabricMaterial;

@@ -99,16 +99,13 @@ impl LabModel {
                 strip.mesh = mesh;
                 strip.grading = grading;
                 strip.yarn_rule = yarns;
-                // thin off-axis strips wrinkle: allow the backward-Euler fallback time to
-                // settle them
-                strip.solver.max_iterations = 500;
                 let curve = strip.run(m, elongations)?;
                 Ok(curve.iter().map(|p| (p.force, p.report.stable)).collect())
             }
             LabModel::Tri { kind, source, .. } => {
                 let mut strip = TriTensile::new(width, gauge, angle);
                 strip.mesh = mesh;
-                strip.solver.max_iterations = 500;
+                strip.solver.max_iterations = crate::scene::STRIP_ITERATIONS;
                 let mat = source
                     .material(*kind, width / mesh.0 as f64)
                     .map_err(SceneError::Input)?;

@@ -255,7 +255,11 @@ pub fn cmd_tensile(
     if let Some(b) = args.boundary {
         strip.boundary = b;
     }
-    strip.solver = args.solver();
+    // the solver's options with the strip's own iteration budget (wrinkling takes time)
+    strip.solver = NewtonOptions {
+        max_iterations: strip.solver.max_iterations,
+        ..args.solver()
+    };
     let Some(m) = args.mesh else {
         crate::auto::tensile_tol(args)?;
         let points = crate::auto::auto_tensile(&strip, &mat, &dl, args)?;
