@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::ks_fit;
+use common::{first_value, ks_fit};
 
 fn temp_file(name: &str, text: &str) -> String {
     let dir = std::env::temp_dir().join(format!("kshell-cli-{}", std::process::id()));
@@ -353,15 +353,7 @@ fn tensile_at_tiny_elongations_ends_at_the_round_off_floor() {
         "-v",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
-    let force: f64 = out
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
+    let force: f64 = first_value(&out);
     assert!(force > 0.0, "{out}");
     let (rc, out, err) = ks_fit(&[
         "tensile",

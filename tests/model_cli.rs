@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{folder, ks_fit};
+use common::{first_value, folder, ks_fit};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 
@@ -62,15 +62,7 @@ fn bend_with_every_triangle_model_gives_an_angle() {
             model,
         ]);
         assert_eq!(rc, 0, "{model}: {err}");
-        let angle: f64 = out
-            .lines()
-            .nth(1)
-            .unwrap()
-            .split(',')
-            .nth(1)
-            .unwrap()
-            .parse()
-            .unwrap();
+        let angle: f64 = first_value(&out);
         assert!(angle > 5.0 && angle < 30.0, "{model}: {out}");
     }
 }
@@ -174,15 +166,7 @@ fn model_tables_are_read_and_misuse_is_explained() {
     let (rc, out, err) = ks_fit(&args("soft-constraints"));
     assert_eq!(rc, 0, "{err}");
     // Baraff–Witkin strain is the stretch: F = k ε W exactly
-    let f: f64 = out
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
+    let f: f64 = first_value(&out);
     assert!((f - 30000.0 * 0.02 * 0.05).abs() < 1e-9, "{out}");
     let (rc, _, err) = ks_fit(&args("kl"));
     assert_eq!(rc, 2);

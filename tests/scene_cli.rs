@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{folder, ks_fit, s};
+use common::{first_value, folder, ks_fit, s};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 
@@ -261,15 +261,7 @@ fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
     ];
     let (rc, out, err) = ks_fit(&args);
     assert_eq!(rc, 0, "{err}");
-    let angle: f64 = out
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
+    let angle: f64 = first_value(&out);
     assert!((angle - 41.4873).abs() < 0.05, "{angle}° ({err})");
     assert!(
         err.contains("chosen from 4x8") && err.contains("< --tol 0.05°"),
@@ -284,15 +276,7 @@ fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
     forced.extend(["--mesh", "4x8"]);
     let (_, out, err) = ks_fit(&forced);
     assert!(!err.contains("chosen"), "{err}");
-    let coarse: f64 = out
-        .lines()
-        .nth(1)
-        .unwrap()
-        .split(',')
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
+    let coarse: f64 = first_value(&out);
     assert!(
         (coarse - 41.4873).abs() > 0.3,
         "{coarse}°: the coarse mesh misses"
@@ -353,8 +337,7 @@ fn strip_force(angle: &str, extra: &[&str]) -> (f64, String) {
     args.extend_from_slice(extra);
     let (rc, out, err) = ks_fit(&args);
     assert_eq!(rc, 0, "{err}");
-    let force = out.lines().nth(1).unwrap().split(',').nth(1).unwrap();
-    (force.parse().unwrap(), err)
+    (first_value(&out), err)
 }
 
 #[test]
@@ -460,15 +443,7 @@ fn a_wrinkling_strip_on_a_fine_forced_mesh_gets_the_strips_budget() {
         ]);
         assert_eq!(rc, 0, "{mesh}: {err}");
         assert!(err.contains(", stable,"), "{mesh}: {err}");
-        let f: f64 = out
-            .lines()
-            .nth(1)
-            .unwrap()
-            .split(',')
-            .nth(1)
-            .unwrap()
-            .parse()
-            .unwrap();
+        let f: f64 = first_value(&out);
         (f, err)
     };
     let (fine, err) = force("24x36");

@@ -5,6 +5,14 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// The second column of the first data row of a CSV that `ks-fit` printed (a strip's force,
+/// a cantilever's drape angle).
+pub fn first_value(out: &str) -> f64 {
+    let cell = out.lines().nth(1).and_then(|l| l.split(',').nth(1));
+    cell.and_then(|c| c.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no value in the first row of:\n{out}"))
+}
+
 /// Runs `ks-fit` in the crate root: (exit code, stdout, stderr).
 pub fn ks_fit(args: &[&str]) -> (i32, String, String) {
     ks_fit_env(args, &[])
