@@ -467,9 +467,9 @@ impl StripRig {
     /// A point that failed, with the Newton iterations of all its attempts (warm start, cheap
     /// attempts, sub-steps, the whole budget) in place of the last attempt's alone, which
     /// understated the work: a strip that had spent its 60 said "did not converge in 20".
-    fn point_failure(&mut self, e: SceneError) -> SceneError {
-        let total = std::mem::take(&mut self.spent);
-        self.spent_factorizations = 0;
+    /// The attempts stay counted in `spent`, for the next point solved (a fitter's counts).
+    fn point_failure(&self, e: SceneError) -> SceneError {
+        let total = self.spent;
         match e {
             SceneError::Solve {
                 stage,
