@@ -316,6 +316,7 @@ impl StripRig {
         // against the predictor from the last equilibrium first
         let mut doubt = false;
         for i in 0..self.elongations.len() {
+            let started = std::time::Instant::now();
             let dl = self.elongations[i];
             let mut warm = self.warm_start(i);
             // a point solved before: a fitter's trial caps its cold solve (`retry_iterations`)
@@ -351,6 +352,9 @@ impl StripRig {
             };
             report.iterations += std::mem::take(&mut self.spent);
             report.factorizations += std::mem::take(&mut self.spent_factorizations);
+            // the point's time is that of all its attempts, as its iterations are (the last
+            // attempt's alone understated a wrinkling point's several times over)
+            report.seconds = started.elapsed().as_secs_f64();
             let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
                 stage: "reaction".into(),
                 source: SolveError::StartOutOfDomain(e.to_string()),
