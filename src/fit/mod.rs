@@ -21,6 +21,9 @@
 //! 1/√(its points) so that every curve counts alike. The model is solved at a few elongation
 //! nodes per strip (denser at small strain) and interpolated (local cubic) to the measured
 //! points; the interpolation error is checked at the end against solves between the nodes.
+//! A strip whose curves have no more distinct measured elongations than nodes (a lab that
+//! reports the force at a few elongations, a short synthetic curve) is solved at those
+//! elongations themselves: its model forces are exact and it needs no interpolation check.
 //! Stages: 1. warp (90°): a11 and η₁; 2. weft (0°): a22 and η₃; 3. the Ẽ11, Ẽ22 cut-offs at
 //! 95 % of the largest strain exercised; 4. shear: G12 and η₄ from every other fitted angle
 //! (45° alone in the paper's protocol); 5. the Ẽ12 cut-off likewise; 6. thickness from the

@@ -68,6 +68,9 @@ pub struct Strip {
     pub curves: Vec<usize>,
     /// elongations the model is solved at (increasing, the last the largest measured)
     pub nodes: Vec<f64>,
+    /// the nodes are the measured elongations of every curve on the strip (no more of them
+    /// than nodes asked for): the model forces at the points are solved, not interpolated
+    pub at_points: bool,
     /// times this strip's mesh is doubled beyond the ladder's level ([`super::refine`])
     pub refine: u32,
 }
@@ -372,6 +375,7 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
                     length,
                     curves: Vec::new(),
                     nodes: Vec::new(),
+                    at_points: false,
                     refine: 0,
                 });
                 strips.len() - 1
@@ -381,12 +385,24 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
         c.strip = i;
     }
     for s in &mut strips {
-        let emax = s
+        let mut points: Vec<f64> = s
             .curves
             .iter()
-            .flat_map(|&k| curves[k].points.last().map(|p| p.0))
-            .fold(0.0, f64::max);
-        s.nodes = nodes_for(emax, n_nodes);
+            .flat_map(|&k| curves[k].points.iter().map(|p| p.0))
+            .collect();
+        points.sort_by(f64::total_cmp);
+        points.dedup();
+        if points.len() <= n_nodes {
+            s.nodes = points;
+            s.at_points = true;
+        } else {
+            let emax = s
+                .curves
+                .iter()
+                .flat_map(|&k| curves[k].points.last().map(|p| p.0))
+                .fold(0.0, f64::max);
+            s.nodes = nodes_for(emax, n_nodes);
+        }
     }
     strips
 }
@@ -425,6 +441,66 @@ mod tests {
         let (e, force) = curve(|x| law(x + 0.3e-3), 5e-3, 50);
         let s = detect_toe(&e, &force);
         assert!((s + 0.3e-3).abs() < 0.03e-3, "{s}");
+    }
+
+    /// A strip with no more distinct measured elongations (over all its curves) than nodes is
+    /// solved at them; one with more gets the Chebyshev–Lobatto nodes, as do repeats whose
+    /// grids differ enough to make more than the node count together.
+    #[test]
+    fn strips_with_few_points_are_solved_at_them() {
+        use crate::dataset::{FabricDataset, TensileTest};
+        let test = |angle: f64, elongation: Vec<f64>| TensileTest {
+            angle_deg: angle,
+            width: 0.05,
+            gauge_length: 0.075,
+            curve: format!("{angle}.csv").into(),
+            force: elongation.iter().map(|e| 1e4 * e).collect(),
+            elongation,
+            role: None,
+            toe: Some(0.0),
+            force_scale: 1.0,
+            columns: None,
+            suspect_kn: false,
+        };
+        let grid = |n: usize, offset: f64| -> Vec<f64> {
+            (1..=n).map(|k| 1e-3 * (k as f64 + offset)).collect()
+        };
+        let data = FabricDataset {
+            name: "few".into(),
+            path: "few.toml".into(),
+            areal_density: Some(0.1),
+            thickness: 2e-4,
+            // two repeats on one grid of 5, one curve of 20, two repeats on grids of 7 apart
+            tensile: vec![
+                test(90.0, grid(5, 0.0)),
+                test(90.0, grid(5, 0.0)),
+                test(45.0, grid(20, 0.0)),
+                test(0.0, grid(7, 0.0)),
+                test(0.0, grid(7, 0.5)),
+            ],
+            bend: Vec::new(),
+            shapes: Vec::new(),
+            known: Default::default(),
+            notes: Vec::new(),
+        };
+        let prep = prepare(&data, false, RepeatMode::All, ToeMode::None, 12).unwrap();
+        let strip = |angle: f64| prep.strips.iter().find(|s| s.angle_deg == angle).unwrap();
+        assert!(strip(90.0).at_points);
+        assert_eq!(strip(90.0).nodes, grid(5, 0.0));
+        // every measured point then has its own node's force, weight 1
+        for &e in &grid(5, 0.0) {
+            let w = interpolation_weights(&strip(90.0).nodes, e);
+            let own: Vec<_> = w.iter().filter(|(_, w)| *w != 0.0).collect();
+            assert_eq!(own.len(), 1, "{e}: {w:?}");
+            assert_eq!(own[0].1, 1.0);
+            assert_eq!(strip(90.0).nodes[own[0].0], e);
+        }
+        for angle in [45.0, 0.0] {
+            assert!(!strip(angle).at_points, "{angle}");
+            assert_eq!(strip(angle).nodes.len(), 12, "{angle}");
+        }
+        assert_eq!(strip(45.0).nodes, nodes_for(20e-3, 12));
+        assert_eq!(strip(0.0).nodes, nodes_for(7.5e-3, 12));
     }
 
     #[test]

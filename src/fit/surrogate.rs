@@ -302,6 +302,7 @@ mod tests {
                 length: 0.075,
                 curves: (0..repeats).collect(),
                 nodes: elong,
+                at_points: true,
                 refine: 0,
             }],
             notes: Vec::new(),

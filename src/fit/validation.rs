@@ -75,17 +75,23 @@ impl Fitter<'_> {
 
     /// Largest relative difference between each strip's interpolated model curve and solves
     /// halfway between its nodes (first mesh level; a strip refined on its own mesh there, as
-    /// its nodes were), strips solved side by side: (error, angle) of the worst strip.
-    fn interpolation_error(&mut self) -> Result<(f64, f64), FitError> {
+    /// its nodes were), strips solved side by side: (error, angle) of the worst strip, `None`
+    /// where every strip is solved at its measured points (nothing is interpolated).
+    fn interpolation_error(&mut self) -> Result<Option<(f64, f64)>, FitError> {
         use rayon::prelude::*;
         let level = self.opts.ladder[0];
         let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
+            .filter(|&s| !self.prep.strips[s].at_points)
             .map(|s| (s, self.prep.strips[s].angle_deg))
             .collect();
+        if jobs.is_empty() {
+            return Ok(None);
+        }
         let nodes = self.predict_many(&jobs, level)?;
         let material = self.material();
         let mut checks = Vec::new();
-        for (s, strip) in self.prep.strips.iter().enumerate() {
+        for &(s, _) in &jobs {
+            let strip = &self.prep.strips[s];
             let mut mids = Vec::new();
             let mut prev = 0.0;
             for &e in &strip.nodes {
@@ -110,15 +116,15 @@ impl Fitter<'_> {
             if let Some(nodes) = self.rigs.get(&key) {
                 rig.warm_between(nodes);
             }
-            checks.push((mids, rig));
+            checks.push((s, mids, rig));
         }
         let solved: Vec<_> = checks
             .par_iter_mut()
-            .map(|(_, rig)| rig.run(false))
+            .map(|(_, _, rig)| rig.run(false))
             .collect();
         let mut worst = (0.0f64, 0.0);
-        for (s, ((mids, _), run)) in checks.iter().zip(solved).enumerate() {
-            let strip = &self.prep.strips[s];
+        for (j, ((s, mids, _), run)) in checks.iter().zip(solved).enumerate() {
+            let strip = &self.prep.strips[*s];
             let pts = run.map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
@@ -128,7 +134,7 @@ impl Fitter<'_> {
             for (&e, p) in mids.iter().zip(&pts) {
                 let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
                     .iter()
-                    .map(|&(k, w)| w * nodes[s][k])
+                    .map(|&(k, w)| w * nodes[j][k])
                     .sum();
                 if p.force.abs() > 0.0 {
                     let r = ((interp - p.force) / p.force).abs();
@@ -138,7 +144,7 @@ impl Fitter<'_> {
                 }
             }
         }
-        Ok(worst)
+        Ok(Some(worst))
     }
 }
 
@@ -258,10 +264,21 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             used_in_fit: curve.used_in_fit,
         });
     }
-    f.say("report: interpolation check (solves halfway between the nodes)");
+    let exact = f.prep.strips.iter().filter(|s| s.at_points).count();
+    if exact < f.prep.strips.len() {
+        f.say("report: interpolation check (solves halfway between the nodes)");
+    }
+    let at_points = if exact == 0 {
+        String::new()
+    } else {
+        format!(
+            "; {exact} of {} strips solved at their measured elongations (no more of them than nodes), not interpolated",
+            f.prep.strips.len()
+        )
+    };
     match f.interpolation_error() {
-        Ok(worst) => f.notes.push(format!(
-        "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}",
+        Ok(Some(worst)) => f.notes.push(format!(
+        "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}{at_points}",
         f.opts.nodes,
         100.0 * worst.0,
         worst.1,
@@ -274,6 +291,9 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         },
         if worst.0 > 1e-3 { "; warning: above 0.1 %, raise the node count" } else { "" }
     )),
+        Ok(None) => f.notes.push(
+            "model curves solved at every measured elongation (no strip has more of them than nodes): nothing interpolated, no interpolation error".to_string(),
+        ),
         Err(e) => f.notes.push(format!("warning: the interpolation check could not be made: {e}")),
     }
     let data = f.data;

@@ -224,7 +224,8 @@ enum Command {
         /// reported error is always the one at the nominal angle.
         #[arg(long, default_value_t = 2.0)]
         max_misalign: f64,
-        /// Elongation nodes per strip at which the model is solved (interpolated between).
+        /// Elongation nodes per strip at which the model is solved (interpolated between); a
+        /// strip with no more distinct measured elongations than this is solved at them.
         #[arg(long, default_value_t = 12)]
         nodes: usize,
         /// Largest acceptable error of a fitted test, percent (mean |relative error| of a
