@@ -88,6 +88,11 @@ fn a_coupled_fabric_gets_its_coupling_and_every_off_axis_strip_follows() {
     );
     assert_eq!(off["fit"]["shear_coupling"].as_str(), Some("off"));
     assert!(off.get("shear_coupling").is_none());
+    // a kept coupling turns the joint sweep off (it would take the yarns away from the coupled
+    // shear's optimum; see fit/joint.rs); without the coupling the sweep runs
+    assert_eq!(auto["fit"]["joint"].as_bool(), Some(false), "{log}");
+    assert!(log.contains("joint sweep not run"), "{log}");
+    assert_eq!(off["fit"]["joint"].as_bool(), Some(true));
     let c = auto["shear_coupling"].as_table().expect("[shear_coupling]");
     for key in ["warp", "weft"] {
         let k = c[key].as_float().unwrap();

@@ -19,11 +19,12 @@ const STAGE_UNCHANGED: f64 = 1e-3;
 pub(super) fn ladder(
     f: &mut Fitter,
     maps: &mut [StageMap],
-    sets: &StageSets,
+    sets: &mut StageSets,
     shear_candidates: &[Vec<f64>],
 ) -> Result<Vec<(usize, usize)>, FitError> {
     let opts = f.opts;
-    let strips = &sets.own[..];
+    let own = sets.own.clone();
+    let strips = &own[..];
     let all: Vec<usize> = strips.iter().flatten().copied().collect();
     let mut meshes = Vec::new();
     let mut previous: Option<Vec<f64>> = None;
@@ -132,6 +133,7 @@ pub(super) fn ladder(
                 let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
                 maps[2] = map;
                 range = r;
+                super::joint::without_sweep_if_coupled(f, sets);
             }
             // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
             if let Some((lo, hi)) = range {

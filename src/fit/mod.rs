@@ -607,13 +607,13 @@ pub fn fit(
     }
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
     f.decide_yarns();
-    let sets = joint::stage_sets(opts, strips.clone(), &maps);
+    let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
+    let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
     if sets.joint.is_some() {
         f.notes.push(
             "joint sweep (--joint): the warp and weft stiffnesses refitted over the off-axis strips too, then the shear, on every mesh".into(),
         );
     }
-    let meshes = ladder::ladder(&mut f, &mut maps, &sets, &shear_candidates)?;
     let last = *meshes.last().expect("one level at least");
     // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist
     // follows the new shear, so the bending (or thickness) stage runs again
