@@ -396,12 +396,8 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
             s.nodes = points;
             s.at_points = true;
         } else {
-            let emax = s
-                .curves
-                .iter()
-                .flat_map(|&k| curves[k].points.last().map(|p| p.0))
-                .fold(0.0, f64::max);
-            s.nodes = nodes_for(emax, n_nodes);
+            // a curve's points increase, so the largest is some curve's last
+            s.nodes = nodes_for(points.last().copied().unwrap_or(0.0), n_nodes);
         }
     }
     strips
