@@ -316,9 +316,80 @@ fn recommend_picks_the_fastest_run_within_the_tolerance() {
     assert_eq!(rc, 3, "{out}");
     assert!(out.contains("recommended: none meets --tol") && out.contains("the most accurate is"));
 
-    let (rc, _, err) = ks_fit(&["recommend", "--material", COTTON, "--scene", "drape"]);
+    // a ladder Richardson cannot use is refused before anything runs
+    let (rc, _, err) = ks_fit(&[
+        "recommend",
+        "--material",
+        COTTON,
+        "--scene",
+        "tensile",
+        "--meshes",
+        "8x12,12x18",
+    ]);
     assert_eq!(rc, 2);
-    assert!(err.contains("several stable equilibria"), "{err}");
+    assert!(err.contains("twice as fine"), "{err}");
+}
+
+/// `recommend --scene drape`: compared on the mean drop (the fold patterns differ between
+/// meshes and models); the reference is the shell on the finest mesh of its ladder, never an
+/// extrapolation, and says how far the mesh before it lies; a sheet mesh must be square.
+#[test]
+fn recommend_compares_the_models_on_the_drape_by_its_mean_drop() {
+    let (rc, out, err) = ks_fit(&[
+        "recommend",
+        "--material",
+        COTTON,
+        "--scene",
+        "drape",
+        "--meshes",
+        "4x4,8x8",
+        "--tol",
+        "0.05",
+    ]);
+    assert!(rc == 0 || rc == 3, "{out}{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert!(
+        lines[0].starts_with("# drape: drape's mean drop (mm)"),
+        "{out}"
+    );
+    assert!(
+        lines[0].contains(
+            "from the shell on 8x8 (the meshes fold differently, so no extrapolation; 4x4 within"
+        ),
+        "{out}"
+    );
+    let reference: f64 = lines[0]
+        .split("reference ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let rows: Vec<Vec<&str>> = lines[2..lines.len() - 1]
+        .iter()
+        .map(|l| l.split(',').collect())
+        .collect();
+    // five models on two meshes, each run once (the drape's default)
+    assert_eq!(rows.len(), 10, "{out}");
+    for r in &rows {
+        let value: f64 = r[4].parse().unwrap();
+        // a 1 m sheet's centre of mass hangs about half a metre below its corners
+        assert!(value > 400.0 && value < 700.0, "{r:?}");
+        if r[0] == "kl" && r[2] == "8x8" {
+            assert!((value - reference).abs() <= 1e-6 * reference, "{r:?}");
+        }
+    }
+    let (rc, _, err) = ks_fit(&[
+        "recommend",
+        "--material",
+        COTTON,
+        "--scene",
+        "drape",
+        "--meshes",
+        "8x16",
+    ]);
+    assert_eq!(rc, 2);
+    assert!(err.contains("square"), "{err}");
 }
 
 /// `recommend --scene picture-frame`: every model runs the frame on the shell's three meshes;

@@ -133,6 +133,12 @@ fn the_drape_on_a_triangle_model_hangs_from_its_pins() {
         shape.depth > 0.01,
         "the corners' approach buckles the sheet"
     );
+    // the centre of mass hangs between the corners and the lowest point
+    assert!(
+        shape.mean_drop > 0.4 && shape.mean_drop < shape.drop,
+        "mean drop {} m",
+        shape.mean_drop
+    );
     let (again, other) = drape.run_tri(&m).unwrap();
     assert_eq!(shape.depth, again.depth);
     assert_eq!(deformed.x, other.x, "one seed, one answer (to the bit)");

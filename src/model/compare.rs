@@ -6,11 +6,14 @@
 
 use crate::converge::{analyse, Level};
 use crate::material::FabricMaterial;
-use crate::scene::{CantileverBend, CornerPull, PictureFrame, TensileStrip};
+use crate::scene::{CantileverBend, CornerPull, Drape, PictureFrame, TensileStrip};
 use crate::solve::NewtonOptions;
 use crate::tri::file::SPRING_CURVATURE;
 use crate::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
 use std::time::Instant;
+
+/// Faces (across, along) of one mesh.
+pub type Mesh = (usize, usize);
 
 /// The test whose quantity is compared.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,6 +37,13 @@ pub enum LabTest {
     /// The corner pull's force (N) at `stretch` (a fraction of the diagonal) on a square of
     /// `side` m ([`CornerPull`], 8 steps).
     Corner { stretch: f64, side: f64 },
+    /// The drape's mean drop (mm): how far the centre of mass of a square of `side` m, hung
+    /// from two corners brought `span` m apart, hangs below them ([`Drape`], 8 steps; see
+    /// [`crate::scene::DrapeShape::mean_drop`]). The drape folds differently on different
+    /// meshes and models (several stable equilibria), so its fold depth has no converged
+    /// value; the mean drop, its potential energy per unit weight, is the measure its branches
+    /// share.
+    Drape { side: f64, span: f64 },
 }
 
 /// Iterations allowed per solve of a showcase scene (as `ks-fit scene`): wrinkling sheets
@@ -98,7 +108,7 @@ fn timed(repeats: usize, mut f: impl FnMut() -> Result<f64, String>) -> Result<(
 }
 
 impl LabTest {
-    /// The shell's mesh ladder for this test: three meshes, each twice as fine.
+    /// The mesh ladder every model runs: three meshes, each twice as fine.
     pub fn meshes(&self) -> Vec<(usize, usize)> {
         let base = match *self {
             LabTest::Tensile { .. } => (8, 12),
@@ -110,8 +120,21 @@ impl LabTest {
             LabTest::Frame { .. } => (8, 8),
             // the clips (a tenth of the side) on cage lines
             LabTest::Corner { .. } => (10, 10),
+            LabTest::Drape { .. } => (8, 8),
         };
         (0..3).map(|k| (base.0 << k, base.1 << k)).collect()
+    }
+
+    /// The shell's ladder: [`LabTest::meshes`], and for the drape one more, 48², whose value
+    /// is the reference (a 1 m sheet of the example cotton locks into an arch on 8² and 16²
+    /// and forms the cowl of Clyde et al.'s Figure 1 from 32²; 32² and 48² fold differently
+    /// and agree in the mean drop to 0.04 %; a 48² triangle model costs minutes).
+    pub fn shell_meshes(&self) -> Vec<(usize, usize)> {
+        let mut m = self.meshes();
+        if matches!(self, LabTest::Drape { .. }) {
+            m.push((48, 48));
+        }
+        m
     }
 
     fn run_shell(&self, m: &FabricMaterial, mesh: (usize, usize)) -> Result<f64, String> {
@@ -144,6 +167,23 @@ impl LabTest {
                 let (p, _) = self.corner(mesh).run(m).map_err(|e| e.to_string())?;
                 Ok(p.last().map_or(f64::NAN, |p| p.force))
             }
+            LabTest::Drape { .. } => {
+                let (s, _) = self.drape(mesh).run(m).map_err(|e| e.to_string())?;
+                Ok(s.mean_drop * 1e3)
+            }
+        }
+    }
+
+    fn drape(&self, mesh: (usize, usize)) -> Drape {
+        let LabTest::Drape { side, span } = *self else {
+            unreachable!("a drape")
+        };
+        Drape {
+            side,
+            span,
+            mesh: mesh.0,
+            solver: scene_solver(),
+            ..Drape::new()
         }
     }
 
@@ -199,6 +239,10 @@ impl LabTest {
                 let (p, _) = self.corner(mesh).run_tri(t).map_err(|e| e.to_string())?;
                 Ok(p.last().map_or(f64::NAN, |p| p.force))
             }
+            LabTest::Drape { .. } => {
+                let (s, _) = self.drape(mesh).run_tri(t).map_err(|e| e.to_string())?;
+                Ok(s.mean_drop * 1e3)
+            }
         }
     }
 
@@ -206,13 +250,16 @@ impl LabTest {
     fn width(&self) -> f64 {
         match *self {
             LabTest::Tensile { width, .. } | LabTest::Bend { width, .. } => width,
-            LabTest::Frame { side, .. } | LabTest::Corner { side, .. } => side,
+            LabTest::Frame { side, .. }
+            | LabTest::Corner { side, .. }
+            | LabTest::Drape { side, .. } => side,
         }
     }
 }
 
 /// Runs `test` with the shell material `shell` and with every triangle model (its `fitted`
-/// parameters where given, else converted), each on the test's three meshes, `repeats` times.
+/// parameters where given, else converted), each on the test's three meshes (the shell also on
+/// [`LabTest::shell_meshes`]), `repeats` times.
 pub fn compare(
     shell: &FabricMaterial,
     fitted: &[TriMaterial],
@@ -220,10 +267,31 @@ pub fn compare(
     repeats: usize,
     progress: &mut dyn FnMut(&str),
 ) -> Comparison {
-    let meshes = test.meshes();
+    let ladders = (test.shell_meshes(), test.meshes());
+    compare_on(
+        shell,
+        fitted,
+        test,
+        (&ladders.0, &ladders.1),
+        repeats,
+        progress,
+    )
+}
+
+/// [`compare`] on given ladders (coarse to fine): the shell's, whose levels make the reference
+/// (each twice as fine as the last for Richardson's extrapolation, except for the drape), and
+/// the triangle models'.
+pub fn compare_on(
+    shell: &FabricMaterial,
+    fitted: &[TriMaterial],
+    test: LabTest,
+    (shell_meshes, meshes): (&[Mesh], &[Mesh]),
+    repeats: usize,
+    progress: &mut dyn FnMut(&str),
+) -> Comparison {
     let mut raw: Vec<Run> = Vec::new();
     let mut failures = Vec::new();
-    for &mesh in &meshes {
+    for &mesh in shell_meshes {
         match timed(repeats, || test.run_shell(shell, mesh)) {
             Ok((seconds, value)) => raw.push(Run {
                 model: "kl",
@@ -239,7 +307,7 @@ pub fn compare(
     }
     for (name, kind) in TriKind::ALL {
         let given = fitted.iter().find(|t| t.kind == kind);
-        for &mesh in &meshes {
+        for &mesh in meshes {
             let params = match given {
                 Some(t) => Ok((t.clone(), "fitted")),
                 None => TriMaterial::equivalent(
@@ -280,22 +348,7 @@ pub fn compare(
             order: None,
         })
         .collect();
-    let finest = shell_levels.last().map(|l| (l.qoi, l.mesh));
-    let study = analyse(shell_levels);
-    let (reference, reference_from) = match (study.extrapolated, finest) {
-        (Some(v), _) => (
-            v,
-            "the shell's Richardson extrapolation over its three meshes".to_string(),
-        ),
-        (None, Some((v, m))) => (
-            v,
-            format!(
-                "the shell on {}x{} (its ladder does not converge monotonically: no extrapolation)",
-                m.0, m.1
-            ),
-        ),
-        (None, None) => (f64::NAN, "none: the shell failed".to_string()),
-    };
+    let (reference, reference_from) = reference(test, shell_levels);
     let runs = raw
         .into_iter()
         .map(|r| Run {
@@ -309,5 +362,57 @@ pub fn compare(
         reference_from,
         runs,
         failures,
+    }
+}
+
+/// The reference value of the shell's `levels` (coarse to fine) and how it was found:
+/// Richardson's extrapolation where the ladder converges monotonically, else the finest level
+/// (with how far the level before it lies). The drape's levels fold differently and are not
+/// each twice as fine: its reference is always the finest.
+fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
+    let finest = levels.last().map(|l| (l.qoi, l.mesh));
+    let before = levels
+        .len()
+        .checked_sub(2)
+        .map(|i| (levels[i].qoi, levels[i].mesh));
+    let spread = |v: f64| match before {
+        Some((q, m)) => format!(
+            "; {}x{} within {:.3} % of it",
+            m.0,
+            m.1,
+            100.0 * ((q - v) / v).abs()
+        ),
+        None => String::new(),
+    };
+    let drape = matches!(test, LabTest::Drape { .. });
+    let extrapolated = if drape {
+        None
+    } else {
+        analyse(levels).extrapolated
+    };
+    match (extrapolated, finest) {
+        (Some(v), _) => (
+            v,
+            "the shell's Richardson extrapolation over its three meshes".to_string(),
+        ),
+        (None, Some((v, m))) if drape => (
+            v,
+            format!(
+                "the shell on {}x{} (the meshes fold differently, so no extrapolation{})",
+                m.0,
+                m.1,
+                spread(v)
+            ),
+        ),
+        (None, Some((v, m))) => (
+            v,
+            format!(
+                "the shell on {}x{} (its ladder does not converge monotonically: no extrapolation{})",
+                m.0,
+                m.1,
+                spread(v)
+            ),
+        ),
+        (None, None) => (f64::NAN, "none: the shell failed".to_string()),
     }
 }

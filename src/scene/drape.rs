@@ -47,6 +47,11 @@ pub struct DrapeShape {
     pub depth: f64,
     /// Side-to-side extent (along x).
     pub width: f64,
+    /// How far the sheet's centre of mass hangs below the corners: Σ wᵢ zᵢ / Σ wᵢ over the
+    /// nodes' weights wᵢ (the consistent gravity load; lumped for a triangle model, which is
+    /// exact for its linear interpolation), i.e. the drape's potential energy per unit weight.
+    /// Unlike the fold depth, this is the same on the different branches a drape can take.
+    pub mean_drop: f64,
     /// The last solve.
     pub report: SolveReport,
 }
@@ -135,6 +140,19 @@ impl Drape {
         )?;
         counts.merge(&more);
         let shape = measure(&sheet, &x, last.clone())?;
+        let load = sheet.model.external_load();
+        let (moment, total) = load
+            .iter()
+            .zip(&x)
+            .fold((0.0, 0.0), |(m, w), (f, p)| (m + f[2] * p[2], w + f[2]));
+        let shape = DrapeShape {
+            mean_drop: if total != 0.0 {
+                -moment / total
+            } else {
+                f64::NAN
+            },
+            ..shape
+        };
         Ok((shape, Deformed::new(sheet, x, counts, last)))
     }
 }
@@ -195,6 +213,7 @@ fn measure<M: SheetModel>(
         drop: -lo[2],
         depth: hi[1] - lo[1],
         width: hi[0] - lo[0],
+        mean_drop: f64::NAN,
         report,
     })
 }

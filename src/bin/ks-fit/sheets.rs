@@ -234,10 +234,11 @@ fn run_kind(
                 _ => unreachable!("a triangle material has parameters"),
             };
             let csv = format!(
-                "drop_mm,depth_mm,width_mm\n{:.4},{:.4},{:.4}\n",
+                "drop_mm,depth_mm,width_mm,mean_drop_mm\n{:.4},{:.4},{:.4},{:.4}\n",
                 s.drop * 1e3,
                 s.depth * 1e3,
-                s.width * 1e3
+                s.width * 1e3,
+                s.mean_drop * 1e3
             );
             (s.depth * 1e3, csv, shape)
         }
