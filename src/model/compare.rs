@@ -370,6 +370,7 @@ pub fn compare_on(
 /// (with how far the level before it lies). The drape's levels fold differently and are not
 /// each twice as fine: its reference is always the finest.
 fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
+    let n = levels.len();
     let finest = levels.last().map(|l| (l.qoi, l.mesh));
     let before = levels
         .len()
@@ -393,7 +394,10 @@ fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
     match (extrapolated, finest) {
         (Some(v), _) => (
             v,
-            "the shell's Richardson extrapolation over its three meshes".to_string(),
+            format!(
+                "the shell's Richardson extrapolation over its {}three meshes",
+                if n > 3 { "finest " } else { "" }
+            ),
         ),
         (None, Some((v, m))) if drape => (
             v,
@@ -407,9 +411,14 @@ fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
         (None, Some((v, m))) => (
             v,
             format!(
-                "the shell on {}x{} (its ladder does not converge monotonically: no extrapolation{})",
+                "the shell on {}x{} ({}: no extrapolation{})",
                 m.0,
                 m.1,
+                if n < 3 {
+                    "fewer than three meshes"
+                } else {
+                    "its ladder does not converge monotonically"
+                },
                 spread(v)
             ),
         ),
