@@ -7,6 +7,32 @@ use common::{first_value, folder, ks_fit};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 
+/// `ks-fit recommend --material COTTON ARGS…`: exit code, stdout, stderr.
+fn recommend(args: &[&str]) -> (i32, String, String) {
+    ks_fit(&[&["recommend", "--material", COTTON], args].concat())
+}
+
+/// The reference on `recommend`'s first line and the rows of its table (split at commas).
+fn table(out: &str) -> (f64, Vec<Vec<&str>>) {
+    let lines: Vec<&str> = out.lines().collect();
+    let reference: f64 = lines[0]
+        .split("reference ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(
+        lines[1],
+        "model,params,mesh,seconds,value,rel_error,within_tol"
+    );
+    let rows = lines[2..lines.len() - 1]
+        .iter()
+        .map(|l| l.split(',').collect())
+        .collect();
+    (reference, rows)
+}
+
 /// A 50 × 75 mm warp strip of stvk-ds converted from the example cotton: the aligned strip's
 /// strain is uniform and the diagonal model has no Poisson coupling, so its force at
 /// elongation δ is the closed form k (ε + ε²/2)(1 + ε) W with ε = δ/L and k the shell's
@@ -251,14 +277,11 @@ fn synth_with_a_triangle_model_writes_that_models_curves() {
 
 /// `recommend`: the table is consistent (every error is |value − reference| / reference, the
 /// pick is the fastest row within --tol), a tolerance nothing meets exits 3 naming the most
-/// accurate run, and the scenes the triangle models cannot run are refused.
+/// accurate run, and a --meshes ladder Richardson's extrapolation cannot use is refused.
 #[test]
 fn recommend_picks_the_fastest_run_within_the_tolerance() {
     let run = |tol: &str| {
-        ks_fit(&[
-            "recommend",
-            "--material",
-            COTTON,
+        recommend(&[
             "--scene",
             "tensile",
             "--angle",
@@ -272,21 +295,7 @@ fn recommend_picks_the_fastest_run_within_the_tolerance() {
     let (rc, out, err) = run("0.02");
     assert_eq!(rc, 0, "{out}{err}");
     let lines: Vec<&str> = out.lines().collect();
-    let reference: f64 = lines[0]
-        .split("reference ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap()
-        .parse()
-        .unwrap();
-    assert_eq!(
-        lines[1],
-        "model,params,mesh,seconds,value,rel_error,within_tol"
-    );
-    let rows: Vec<Vec<&str>> = lines[2..lines.len() - 1]
-        .iter()
-        .map(|l| l.split(',').collect())
-        .collect();
+    let (reference, rows) = table(&out);
     // the shell and all four triangle models (springs too: the strip is on the warp), 3 meshes
     assert_eq!(rows.len(), 15, "{out}");
     let mut fastest_within: Option<(f64, String)> = None;
@@ -317,15 +326,7 @@ fn recommend_picks_the_fastest_run_within_the_tolerance() {
     assert!(out.contains("recommended: none meets --tol") && out.contains("the most accurate is"));
 
     // a ladder Richardson cannot use is refused before anything runs
-    let (rc, _, err) = ks_fit(&[
-        "recommend",
-        "--material",
-        COTTON,
-        "--scene",
-        "tensile",
-        "--meshes",
-        "8x12,12x18",
-    ]);
+    let (rc, _, err) = recommend(&["--scene", "tensile", "--meshes", "8x12,12x18"]);
     assert_eq!(rc, 2);
     assert!(err.contains("twice as fine"), "{err}");
 }
@@ -335,40 +336,20 @@ fn recommend_picks_the_fastest_run_within_the_tolerance() {
 /// extrapolation, and says how far the mesh before it lies; a sheet mesh must be square.
 #[test]
 fn recommend_compares_the_models_on_the_drape_by_its_mean_drop() {
-    let (rc, out, err) = ks_fit(&[
-        "recommend",
-        "--material",
-        COTTON,
-        "--scene",
-        "drape",
-        "--meshes",
-        "4x4,8x8",
-        "--tol",
-        "0.05",
-    ]);
+    let (rc, out, err) = recommend(&["--scene", "drape", "--meshes", "4x4,8x8", "--tol", "0.05"]);
     assert!(rc == 0 || rc == 3, "{out}{err}");
-    let lines: Vec<&str> = out.lines().collect();
+    let first = out.lines().next().unwrap_or_default();
     assert!(
-        lines[0].starts_with("# drape: drape's mean drop (mm)"),
+        first.starts_with("# drape: drape's mean drop (mm)"),
         "{out}"
     );
     assert!(
-        lines[0].contains(
+        first.contains(
             "from the shell on 8x8 (the meshes fold differently, so no extrapolation; 4x4 within"
         ),
         "{out}"
     );
-    let reference: f64 = lines[0]
-        .split("reference ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap()
-        .parse()
-        .unwrap();
-    let rows: Vec<Vec<&str>> = lines[2..lines.len() - 1]
-        .iter()
-        .map(|l| l.split(',').collect())
-        .collect();
+    let (reference, rows) = table(&out);
     // five models on two meshes, each run once (the drape's default)
     assert_eq!(rows.len(), 10, "{out}");
     for r in &rows {
@@ -379,15 +360,7 @@ fn recommend_compares_the_models_on_the_drape_by_its_mean_drop() {
             assert!((value - reference).abs() <= 1e-6 * reference, "{r:?}");
         }
     }
-    let (rc, _, err) = ks_fit(&[
-        "recommend",
-        "--material",
-        COTTON,
-        "--scene",
-        "drape",
-        "--meshes",
-        "8x16",
-    ]);
+    let (rc, _, err) = recommend(&["--scene", "drape", "--meshes", "8x16"]);
     assert_eq!(rc, 2);
     assert!(err.contains("square"), "{err}");
 }
@@ -399,10 +372,7 @@ fn recommend_compares_the_models_on_the_drape_by_its_mean_drop() {
 /// their springs per mesh for this reason).
 #[test]
 fn recommend_compares_the_models_on_the_picture_frame() {
-    let (rc, out, err) = ks_fit(&[
-        "recommend",
-        "--material",
-        COTTON,
+    let (rc, out, err) = recommend(&[
         "--scene",
         "picture-frame",
         "--shear-deg",
@@ -415,12 +385,7 @@ fn recommend_compares_the_models_on_the_picture_frame() {
         out.starts_with("# picture-frame: picture frame's shear force at 20°"),
         "{out}"
     );
-    let rows: Vec<Vec<&str>> = out
-        .lines()
-        .skip(2)
-        .filter(|l| !l.starts_with("recommended"))
-        .map(|l| l.split(',').collect())
-        .collect();
+    let (_, rows) = table(&out);
     assert_eq!(rows.len(), 15, "{out}");
     for r in &rows {
         let error: f64 = r[5].parse().unwrap();
