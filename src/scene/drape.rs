@@ -140,19 +140,6 @@ impl Drape {
         )?;
         counts.merge(&more);
         let shape = measure(&sheet, &x, last.clone())?;
-        let load = sheet.model.external_load();
-        let (moment, total) = load
-            .iter()
-            .zip(&x)
-            .fold((0.0, 0.0), |(m, w), (f, p)| (m + f[2] * p[2], w + f[2]));
-        let shape = DrapeShape {
-            mean_drop: if total != 0.0 {
-                -moment / total
-            } else {
-                f64::NAN
-            },
-            ..shape
-        };
         Ok((shape, Deformed::new(sheet, x, counts, last)))
     }
 }
@@ -209,11 +196,22 @@ fn measure<M: SheetModel>(
             hi[c] = hi[c].max(p[c]);
         }
     }
+    // the centre of mass from the nodes' weights (gravity along −z)
+    let (moment, total) = sheet
+        .model
+        .external_load()
+        .iter()
+        .zip(x)
+        .fold((0.0, 0.0), |(m, w), (f, p)| (m + f[2] * p[2], w + f[2]));
     Ok(DrapeShape {
         drop: -lo[2],
         depth: hi[1] - lo[1],
         width: hi[0] - lo[0],
-        mean_drop: f64::NAN,
+        mean_drop: if total != 0.0 {
+            -moment / total
+        } else {
+            f64::NAN
+        },
         report,
     })
 }
