@@ -32,6 +32,9 @@ pub const BETA_MAX: f64 = 6.0;
 /// Bound K of the coupling's κ ê (see the module doc).
 pub const COUPLING_SPAN: f64 = 2.0;
 
+/// Share of the coupling's bound K within which a stage starts κ ê ([`StageMap::encode_start`]).
+pub const UNSATURATED: f64 = 0.9;
+
 /// The variable u of a term bending at β (β clamped just inside ±B).
 pub fn beta_to_var(beta: f64) -> f64 {
     let t = (beta / BETA_MAX).clamp(-1.0 + 1e-9, 1.0 - 1e-9);
@@ -165,6 +168,23 @@ impl StageMap {
             Direction::Weft => law.a22,
             Direction::Shear => law.g12,
         }
+    }
+
+    /// [`StageMap::encode`] as a minimiser's start: a coupling at its bound (|κ ê| above
+    /// [`UNSATURATED`] of K) is moved inside it. There tanh is flat (dκ/dv ≈ 1e-9 at the
+    /// bound), so a stage started from a saturated κ could never move it back: measured on
+    /// strips made with κ₁ = −25 at 7 angles, the 8 × 12 level drove κ₁ to the bound
+    /// (−39.0, absorbing that mesh's error) and every finer level then left it there.
+    pub fn encode_start(&self, law: &Orthotropic) -> Vec<f64> {
+        let mut p = self.encode(law);
+        if self.coupling {
+            let top = COUPLING_SPAN * UNSATURATED.atanh();
+            let n = p.len();
+            for v in &mut p[n - 2..] {
+                *v = v.clamp(-top, top);
+            }
+        }
+        p
     }
 
     pub fn encode(&self, law: &Orthotropic) -> Vec<f64> {
@@ -396,6 +416,25 @@ mod tests {
         map.decode(&q, &mut raised);
         assert_eq!(raised.shear.degree(), 3);
         assert!((raised.coupling.unwrap().warp + 12.0).abs() < 1e-9);
+        // a start leaves κ alone inside UNSATURATED of the bound, and moves a saturated κ
+        // back to where tanh has slope again (a stage could not move it otherwise)
+        assert_eq!(map.encode_start(&l), p);
+        let ehat = 2.0 * map.xhat.sqrt();
+        let mut at_bound = l.clone();
+        at_bound.coupling = Some(ShearCoupling {
+            warp: -COUPLING_SPAN / ehat,
+            weft: 0.5 * COUPLING_SPAN / ehat,
+        });
+        let saturated = map.encode(&at_bound);
+        assert!(map.dkappa(saturated[4]) * ehat < 1e-6, "{saturated:?}");
+        let start = map.encode_start(&at_bound);
+        assert_eq!(start[..5], [&saturated[..4], &[start[4]]].concat()[..]);
+        assert_eq!(start[5], saturated[5]);
+        let mut moved = at_bound.clone();
+        map.decode(&start, &mut moved);
+        let k = moved.coupling.unwrap().warp * ehat;
+        assert!((k + UNSATURATED * COUPLING_SPAN).abs() < 1e-12, "κê = {k}");
+        assert!(map.dkappa(start[4]) * ehat > 0.15, "{start:?}");
         // |κ ê| ≤ K whatever the variables
         for v in [-1e4, -3.0, 0.0, 40.0] {
             let mut r = p.clone();

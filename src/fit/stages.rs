@@ -20,6 +20,10 @@ pub(super) enum StageMode {
     /// every variable, a degree just raised: given up when its space-mapped start finds no
     /// better law
     Raise,
+    /// every variable, a degree just raised, fitted whatever its space-mapped start finds
+    /// (`--degree`, and a raise with the tension–shear coupling on, whose start the
+    /// homogeneous strip cannot judge)
+    RaiseAlways,
     /// the stiffness c alone, η's shape held (the joint sweep's yarn stages, see
     /// [`super::Joint`]); a known stiffness leaves nothing to fit
     Stiffness,
@@ -182,7 +186,7 @@ impl Fitter<'_> {
         }
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
         let ncurves: usize = curves.iter().map(Vec::len).sum();
-        let mut p = map.encode(&self.law);
+        let mut p = map.encode_start(&self.law);
         let base = self.law.clone();
         let first_level = level == self.opts.ladder[0];
         let opts = self.stage_options(level, 1e-12, ncurves);
@@ -475,10 +479,10 @@ impl Fitter<'_> {
                 }
                 None => map.decode(cand, &mut self.law),
             }
-            let mode = if best.is_some() {
-                StageMode::Raise
-            } else {
-                StageMode::Full
+            let mode = match (&best, self.opts.fixed_degree) {
+                (None, _) => StageMode::Full,
+                (Some(_), Some(_)) => StageMode::RaiseAlways,
+                (Some(_), None) => StageMode::Raise,
             };
             let run = self.shell_stage(map, strips, level, true, mode, None);
             let (err, range) = match run {
