@@ -130,8 +130,7 @@ pub(super) fn ladder(
             };
             if k == 2 && li == 0 {
                 // then, with the degree chosen, whether the tension–shear coupling pays
-                let (map, _, r) =
-                    f.coupling_trial(maps[2], &strips[2], level, err, range, shear_candidates)?;
+                let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
                 maps[2] = map;
                 range = r;
                 super::joint::without_sweep_if_coupled(f, sets);

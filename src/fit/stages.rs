@@ -21,8 +21,7 @@ pub(super) enum StageMode {
     /// better law
     Raise,
     /// every variable, a degree just raised, fitted whatever its space-mapped start finds
-    /// (`--degree`, and a raise with the tension–shear coupling on, whose start the
-    /// homogeneous strip cannot judge)
+    /// (`--degree`: given up, the raise left the shear at degree 1 under `--degree 2`)
     RaiseAlways,
     /// the stiffness c alone, η's shape held (the joint sweep's yarn stages, see
     /// [`super::Joint`]); a known stiffness leaves nothing to fit
