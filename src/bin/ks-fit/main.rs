@@ -188,7 +188,10 @@ enum Command {
         /// Highest polynomial degree of each η tried (lowest first).
         #[arg(long, default_value_t = 3)]
         max_degree: usize,
-        /// Use exactly this degree for every η instead of choosing (for comparisons).
+        /// Use exactly this degree for every η instead of choosing (for comparisons). Each
+        /// raised degree is fitted whatever its start finds; a law that comes out implausible
+        /// (its stress stops rising in the tested range) or with a term too small to matter
+        /// keeps the degree below, and the log says so.
         #[arg(long)]
         degree: Option<usize>,
         /// Meshes of a 50 × 75 mm strip, coarse to fine (other strips keep the element size).
