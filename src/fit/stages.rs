@@ -21,7 +21,8 @@ pub(super) enum StageMode {
     /// better law
     Raise,
     /// every variable, a degree just raised, fitted whatever its space-mapped start finds
-    /// (`--degree`: given up, the raise left the shear at degree 1 under `--degree 2`)
+    /// (`--degree`, where giving the raise up had left the shear at degree 1 under
+    /// `--degree 2`)
     RaiseAlways,
     /// the stiffness c alone, η's shape held (the joint sweep's yarn stages, see
     /// [`super::Joint`]); a known stiffness leaves nothing to fit
