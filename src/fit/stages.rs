@@ -187,6 +187,13 @@ impl Fitter<'_> {
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
         let ncurves: usize = curves.iter().map(Vec::len).sum();
         let mut p = map.encode_start(&self.law);
+        if p != map.encode(&self.law) {
+            self.say(&format!(
+                "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
+                map.dir.name(),
+                100.0 * super::map::UNSATURATED
+            ));
+        }
         let base = self.law.clone();
         let first_level = level == self.opts.ladder[0];
         let opts = self.stage_options(level, 1e-12, ncurves);
