@@ -312,12 +312,20 @@ impl StripRig {
         // the last point did not start from a good warm start: this one's is measured
         // against the predictor from the last equilibrium first
         let mut doubt = false;
+        // a stored equilibrium of this run turned out a saddle for the new parameters (it
+        // was flat where the strip now wrinkles): the later points' stored ones are on the
+        // same lost branch, and the predictor from the wrinkled state just solved is taken
+        // instead (measured on the bundled cotton: such a warm start took 11–12 iterations,
+        // mostly escaping the saddle; the five fits 7843 → 7714 Newton iterations, every
+        // fitted value the same)
+        let mut lost_branch = false;
         for i in 0..self.elongations.len() {
             let started = std::time::Instant::now();
             let dl = self.elongations[i];
             let mut warm = self.warm_start(i);
             // a point solved before: a fitter's trial caps its cold solve (`retry_iterations`)
             let stored = warm.is_some();
+            warm = warm.filter(|_| !lost_branch);
             if doubt {
                 warm =
                     warm.filter(|w| self.warm_beats_predictor(w, &previous, before.as_ref(), dl));
@@ -333,6 +341,7 @@ impl StripRig {
             doubt = warm_solved
                 .as_ref()
                 .is_none_or(|r| r.1.initial_residual.unwrap_or(0.0) > warm::POOR_START);
+            lost_branch |= warm_solved.as_ref().is_some_and(|r| r.1.saddle_escapes > 0);
             let (x, mut report, lin) = match warm_solved {
                 Some(r) => r,
                 None if stored => {
