@@ -156,6 +156,12 @@ fn noise_free_degree2_data_are_fitted_back() {
         .map(|v| v.as_integer().unwrap())
         .sum();
     assert_eq!(per_stage, fit["newton_iterations"].as_integer().unwrap());
+    // every run solves at least one equilibrium, and every equilibrium is counted
+    let equilibria = fit["equilibria_solved"].as_integer().unwrap();
+    assert!(
+        equilibria >= fit["objective_evaluations"].as_integer().unwrap(),
+        "{equilibria} equilibria"
+    );
     let tests = fit["test"].as_array().expect("[[fit.test]]");
     let mut kinds = Vec::new();
     for t in tests {

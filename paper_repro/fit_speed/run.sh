@@ -52,8 +52,8 @@ fi
   echo "repeat's own best force scale (the law's shape error); repeat scales: the range of those"
   echo "scales over all curves; drape angles: Table 4's (target 41.5°)."
   echo
-  echo "| fabric | wall s | evaluations | Newton its | meshes | degrees w/f/s | error 90 / 0 / 45 / 22.5 / 67.5° | scaled 90 / 0 / 45 / 22.5 / 67.5° | repeat scales | drape warp / weft | mesh_change (of) / curves |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| fabric | wall s | evaluations | Newton its | equilibria | meshes | degrees w/f/s | error 90 / 0 / 45 / 22.5 / 67.5° | scaled 90 / 0 / 45 / 22.5 / 67.5° | repeat scales | drape warp / weft | mesh_change (of) / curves |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 } > $out/summary.md
 {
   echo
@@ -86,7 +86,7 @@ for f in canvas cotton silk denim wool; do
   scaled="$(field $toml tensile 90.0 avg_rel_error_scaled) / $(field $toml tensile 0.0 avg_rel_error_scaled) / $(field $toml tensile 45.0 avg_rel_error_scaled) / $(field $toml tensile 22.5 avg_rel_error_scaled) / $(field $toml tensile 67.5 avg_rel_error_scaled)"
   drape="$(field $toml bend 90.0 drape_angle_deg) / $(field $toml bend 0.0 drape_angle_deg)"
   mesh="$(awk '$1 == "mesh_change" { printf "%.2f %%", 100 * $3 }' $toml) ($(get mesh_change_parameter | tr -d '"')) / $(awk '$1 == "mesh_change_curves" { printf "%.2f %%", 100 * $3 }' $toml)"
-  echo "| $f | $(get wall_seconds) | $(get objective_evaluations) | $(get newton_iterations) | $(get meshes | tr -d '"[]') | $degrees | $err | $scaled | $(range $toml repeat_scale) | $drape | $mesh |" >> $out/summary.md
+  echo "| $f | $(get wall_seconds) | $(get objective_evaluations) | $(get newton_iterations) | $(get equilibria_solved | sed 's/ *#.*//') | $(get meshes | tr -d '"[]') | $degrees | $err | $scaled | $(range $toml repeat_scale) | $drape | $mesh |" >> $out/summary.md
   stages=$(sed -n '/^\[fit.stage_seconds\]/,/^$/p' "$toml" | grep ' = ' | sed 's/"//g; s/ = /: /' | paste -sd, - | sed 's/,/, /g')
   echo "| $f | $stages |" >> $out/stages.tmp
   ptoml=$out/$f-paper-fit.toml

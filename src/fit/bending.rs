@@ -146,6 +146,7 @@ impl Fitter<'_> {
             source,
         })?;
         self.stats.evaluations += evals;
+        self.stats.equilibria += evals;
         self.stats.newton_iterations += newton;
         let b = rigidity(&p);
         let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
@@ -174,13 +175,14 @@ impl Fitter<'_> {
         self.bend_angles.clear();
         for rig in &mut rigs {
             rig.set_bending(Some(b));
-            rig.run(false)
-                .map(|pt| self.bend_angles.push(pt.drape_angle_deg))
-                .map_err(|source| FitError::Scene {
-                    stage: "drape angles at the fitted rigidities".into(),
-                    source,
-                })?;
+            let pt = rig.run(false).map_err(|source| FitError::Scene {
+                stage: "drape angles at the fitted rigidities".into(),
+                source,
+            })?;
+            self.bend_angles.push(pt.drape_angle_deg);
             self.stats.evaluations += 1;
+            self.stats.equilibria += 1;
+            self.stats.newton_iterations += pt.report.iterations;
         }
         self.keep_bend_rigs(bends, level, rigs);
         self.bending = Some(b);

@@ -265,17 +265,22 @@ impl Fitter<'_> {
             .map(|rig| {
                 rig.set_material(&law, tau)?;
                 rig.set_bending(bending);
-                rig.run(false).map(|p| p.drape_angle_deg)
+                rig.run(false)
+                    .map(|p| (p.drape_angle_deg, p.report.iterations))
             })
             .collect();
         self.stats.evaluations += runs.len();
         self.keep_bend_rigs(&data.bend, level, rigs);
-        runs.into_iter()
-            .collect::<Result<Vec<f64>, _>>()
-            .map_err(|source| FitError::Scene {
-                stage: format!("mesh check: the cantilevers on {}×{}", level.0, level.1),
-                source,
-            })
+        let runs: Vec<(f64, usize)> =
+            runs.into_iter()
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|source| FitError::Scene {
+                    stage: format!("mesh check: the cantilevers on {}×{}", level.0, level.1),
+                    source,
+                })?;
+        self.stats.equilibria += runs.len();
+        self.stats.newton_iterations += runs.iter().map(|r| r.1).sum::<usize>();
+        Ok(runs.into_iter().map(|r| r.0).collect())
     }
 
     /// The refit change from `from` to the mesh twice as fine, measured there (the ladder's

@@ -225,6 +225,9 @@ pub struct FitStats {
     /// space-mapped starts of the shell stages
     pub bootstrap_evaluations: usize,
     pub newton_iterations: usize,
+    /// equilibria solved to get them: strip nodes and cantilevers, every run (the iterations
+    /// one equilibrium takes, on average, are `newton_iterations` over this)
+    pub equilibria: usize,
     /// equilibria of the tensile stages that ended unstable (saddles of wrinkling strips):
     /// the points interpolated from them are excluded from the objective
     pub unstable_solves: usize,

@@ -33,6 +33,11 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
     let _ = writeln!(s, "newton_iterations = {}", r.stats.newton_iterations);
     let _ = writeln!(
         s,
+        "equilibria_solved = {}    # strip nodes and cantilevers solved, every run (Newton iterations per equilibrium: newton_iterations / equilibria_solved)",
+        r.stats.equilibria
+    );
+    let _ = writeln!(
+        s,
         "yarn_rule = {}    # how the strips integrated the yarn terms (--yarn-rule; auto as decided)",
         toml_str(r.yarn_rule.name())
     );

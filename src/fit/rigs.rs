@@ -140,6 +140,7 @@ impl Fitter<'_> {
         let pts = rig.run(sens)?;
         self.stats.evaluations += 1;
         self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+        self.stats.equilibria += pts.len();
         Ok((
             pts.iter().map(node_force).collect(),
             pts.into_iter().map(|p| p.dforce).collect(),
@@ -254,6 +255,7 @@ impl Fitter<'_> {
                     self.stats.evaluations += 1;
                     self.stats.newton_iterations +=
                         pts.iter().map(|p| p.report.iterations).sum::<usize>();
+                    self.stats.equilibria += pts.len();
                     let f: Vec<f64> = pts.iter().map(node_force).collect();
                     self.predictions.insert((key.clone(), bits.clone()), f);
                 }

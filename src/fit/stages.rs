@@ -202,7 +202,7 @@ impl Fitter<'_> {
             .flatten()
             .map(|&c| self.prep.curves[c].points.len())
             .collect();
-        let (mut evals, mut newton, mut unstable) = (0, 0, 0);
+        let (mut evals, mut newton, mut unstable, mut solved) = (0, 0, 0, 0);
         let tau = self.thickness;
         let prep = &self.prep;
         // every evaluation's variables and residuals, for the shape error at the optimum
@@ -245,6 +245,7 @@ impl Fitter<'_> {
                     other => other,
                 })?;
                 newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+                solved += pts.len();
                 unstable += pts.iter().filter(|p| !p.report.stable).count();
                 let forces: Vec<f64> = pts.iter().map(super::rigs::node_force).collect();
                 let d: Vec<Vec<f64>> = if jac {
@@ -314,6 +315,7 @@ impl Fitter<'_> {
         if (raise && m.kept == 0) || screened_out {
             self.stats.evaluations += evals;
             self.stats.newton_iterations += newton;
+            self.stats.equilibria += solved;
             self.stats.unstable_solves += unstable;
             self.log_degree(note);
             for (key, rig) in rigs {
@@ -369,6 +371,7 @@ impl Fitter<'_> {
         }
         self.stats.evaluations += evals;
         self.stats.newton_iterations += newton;
+        self.stats.equilibria += solved;
         self.stats.unstable_solves += unstable;
         map.decode(&p, &mut self.law);
         let err = (rep.objective / ncurves.max(1) as f64).sqrt();

@@ -157,6 +157,7 @@ impl Fitter<'_> {
             source,
         })?;
         self.stats.evaluations += evals;
+        self.stats.equilibria += evals;
         self.stats.newton_iterations += newton;
         let (law, tau) = scaled(&p);
         if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
@@ -174,14 +175,17 @@ impl Fitter<'_> {
         // the drape angles at the accepted thickness (warm: a Newton step or two)
         self.bend_angles.clear();
         for rig in &mut rigs {
-            rig.set_material(&law, tau)
+            let pt = rig
+                .set_material(&law, tau)
                 .and_then(|_| rig.run(false))
-                .map(|pt| self.bend_angles.push(pt.drape_angle_deg))
                 .map_err(|source| FitError::Scene {
                     stage: "drape angles at the fitted thickness".into(),
                     source,
                 })?;
+            self.bend_angles.push(pt.drape_angle_deg);
             self.stats.evaluations += 1;
+            self.stats.equilibria += 1;
+            self.stats.newton_iterations += pt.report.iterations;
         }
         self.keep_bend_rigs(bends, level, rigs);
         self.law = law;

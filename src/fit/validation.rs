@@ -131,6 +131,7 @@ impl Fitter<'_> {
             })?;
             self.stats.evaluations += 1;
             self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
+            self.stats.equilibria += pts.len();
             for (&e, p) in mids.iter().zip(&pts) {
                 let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
                     .iter()

@@ -199,7 +199,7 @@ pub fn cmd_fit(
         .map(|(s, t)| format!("{s} {t:.1} s"))
         .collect();
     println!(
-        "fitted on {} in {:.1} s: {} objective evaluations, {} Newton iterations ({})",
+        "fitted on {} in {:.1} s: {} objective evaluations, {} Newton iterations over {} equilibria ({})",
         result
             .meshes
             .iter()
@@ -214,6 +214,7 @@ pub fn cmd_fit(
         result.stats.seconds,
         result.stats.evaluations,
         result.stats.newton_iterations,
+        result.stats.equilibria,
         stages.join(", ")
     );
     let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
