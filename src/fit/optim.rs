@@ -491,9 +491,42 @@ fn gauss_newton(
     report.objective = f;
 }
 
+/// The share of the objective ‖r‖² that the Gauss–Newton step from (r, J) is predicted to
+/// remove: 1 − ‖r + J δ‖² / ‖r‖², δ the least-squares solution of J δ = −r (0 where r is 0
+/// or J has no rank to step with).
+pub fn gauss_newton_gain(j: &DMatrix<f64>, r: &[f64]) -> f64 {
+    let r = DVector::from_column_slice(r);
+    let f = r.norm_squared();
+    if f == 0.0 || j.ncols() == 0 {
+        return 0.0;
+    }
+    let svd = j.clone().svd(true, true);
+    let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    match svd.solve(&(-&r), 1e-12 * top) {
+        Ok(d) if d.iter().all(|v| v.is_finite()) => {
+            let after = (&r + j * d).norm_squared();
+            (1.0 - after / f).clamp(0.0, 1.0)
+        }
+        _ => 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The predicted gain of a linear least-squares problem's Gauss–Newton step is exact: all
+    /// of ‖r‖² when r lies in J's range, none of it when r is orthogonal to the range, and the
+    /// share of r inside the range otherwise.
+    #[test]
+    fn the_gauss_newton_gain_is_the_share_of_the_residual_in_the_jacobians_range() {
+        let j = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 2.0, 0.0, 0.0]);
+        assert!((gauss_newton_gain(&j, &[3.0, -1.0, 0.0]) - 1.0).abs() < 1e-14);
+        assert_eq!(gauss_newton_gain(&j, &[0.0, 0.0, 5.0]), 0.0);
+        let g = gauss_newton_gain(&j, &[3.0, 0.0, 4.0]);
+        assert!((g - 9.0 / 25.0).abs() < 1e-14, "{g}");
+        assert_eq!(gauss_newton_gain(&j, &[0.0, 0.0, 0.0]), 0.0);
+    }
 
     /// Rosenbrock as residuals r = (10 (y − x²), 1 − x).
     fn rosenbrock(p: &[f64], jac: bool) -> Result<Evaluation, ()> {
