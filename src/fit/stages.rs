@@ -159,11 +159,13 @@ impl Fitter<'_> {
     /// One tensile stage on the shell model at one mesh level, over the stage's strips;
     /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
     /// strain range the strips exercise there. On the first level the stage starts with
-    /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree whose mapped steps
-    /// find no better law is given up (`None`): a bet that the shell's own iterations from a
-    /// zero-weight term would not buy the degree gain either (on noise-free cotton they gained
-    /// nothing in one iteration and 10 s; on the bundled fabrics, before the mapped start,
-    /// degree 2 gained −3 to 23 % of shape error, never the 30 % needed).
+    /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
+    /// whose mapped steps find no better law is given up (`None`): a bet that the shell's own
+    /// iterations from a zero-weight term would not buy the degree gain either (on noise-free
+    /// cotton they gained nothing in one iteration and 10 s; on the bundled fabrics, before the
+    /// mapped start, degree 2 gained −3 to 23 % of shape error, never the 30 % needed). A finer
+    /// level's stage takes the mapped steps only where its own Gauss–Newton step promises them
+    /// work (below).
     pub(super) fn shell_stage(
         &mut self,
         map: StageMap,
@@ -279,10 +281,12 @@ impl Fitter<'_> {
         // with sensitivities: the strips' parameter tangents then predict the first trial's
         // equilibria, and the minimiser's first evaluation is this one
         let e0 = problem(&p, true).map_err(fail)?;
-        let gn_gain = e0
-            .jacobian
-            .as_ref()
-            .map_or(1.0, |j| super::optim::gauss_newton_gain(j, &e0.residuals));
+        let gn_gain = match &e0.jacobian {
+            Some(j) if !first_level && !stiffness_only => {
+                super::optim::gauss_newton_gain(j, &e0.residuals)
+            }
+            _ => 1.0,
+        };
         let r0 = e0.residuals;
         let flat: Vec<usize> = curves.iter().flatten().copied().collect();
         let mut shell = |q: &[f64]| problem(q, false).ok().map(|e| e.residuals);
