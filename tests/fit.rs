@@ -634,7 +634,7 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
         let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
         (doc, out)
     };
-    // five points a curve: with the default 12 nodes every strip is solved at its points
+    // five points a curve: with 12 nodes every strip is solved at its points
     let fit = |meshes: &str| fit_with(meshes, "12");
     let value = |t: &toml::Table, k: &str| t[k].as_float().unwrap();
     let (ladder, _) = fit("ladder");

@@ -158,7 +158,7 @@ impl Default for FitOptions {
             skip_tol: 1e-2,
             degree_gain: 0.7,
             degree_good: 2e-3,
-            nodes: 12,
+            nodes: 9,
             fit_tol: 1e-3,
             rel_decrease: 1e-2,
             max_iterations: 25,

@@ -227,9 +227,10 @@ enum Command {
         /// reported error is always the one at the nominal angle.
         #[arg(long, default_value_t = 2.0)]
         max_misalign: f64,
-        /// Elongation nodes per strip at which the model is solved (interpolated between); a
-        /// strip with no more distinct measured elongations than this is solved at them.
-        #[arg(long, default_value_t = 12)]
+        /// Elongation nodes per strip at which the model is solved (interpolated between by
+        /// local quintics); a strip with no more distinct measured elongations than this is
+        /// solved at them.
+        #[arg(long, default_value_t = 9)]
         nodes: usize,
         /// Largest acceptable error of a fitted test, percent (mean |relative error| of a
         /// curve, relative drape-angle error of a bend). Above it the fit still writes the
