@@ -382,7 +382,7 @@ impl StripRig {
                 .sum();
             let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
             let dforce = if sensitivities {
-                let (df, dq, fresh) =
+                let (df, dq, fresh, indefinite) =
                     self.force_sensitivities(&x, lin)
                         .map_err(|source| SceneError::Solve {
                             stage: format!("sensitivities at elongation {:.4} mm", dl * 1e3),
@@ -392,6 +392,9 @@ impl StripRig {
                 // a tangent factorised again for the sensitivities counts as an iteration
                 report.iterations += usize::from(fresh);
                 report.factorizations += usize::from(fresh);
+                // a saddle found only here is reported like one the solve found: the fitter
+                // leaves its point out of the objective
+                report.stable &= !indefinite;
                 df
             } else {
                 self.tangents[i] = None;
