@@ -20,7 +20,8 @@
 //! drape angles, over every measured point of every repeat used, each curve weighted by
 //! 1/√(its points) so that every curve counts alike. The model is solved at a few elongation
 //! nodes per strip (Chebyshev–Lobatto: denser at both ends) and interpolated (local quintic)
-//! to the measured points; the interpolation error is checked at the end against solves between the nodes.
+//! to the measured points; the interpolation error is checked at the end against solves
+//! between the nodes.
 //! A strip whose curves have no more distinct measured elongations than nodes (a lab that
 //! reports the force at a few elongations, a short synthetic curve) is solved at those
 //! elongations themselves: its model forces are exact and it needs no interpolation check.
