@@ -50,7 +50,7 @@ fn main() {
                 .get(k + 1)
                 .map_or("-".to_string(), |f| format!("{:+.3e}", f - forces[k]));
             println!(
-                "({gx:.1}, {gy:.1})               {:>2}x{:<3}   {:.9}   {:7.3}   {diff}",
+                "({gx:.2}, {gy:.2})             {:>2}x{:<3}   {:.9}   {:7.3}   {diff}",
                 mesh.0, mesh.1, forces[k], times[k]
             );
         }

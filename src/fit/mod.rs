@@ -629,7 +629,8 @@ pub fn fit(
             f.thickness_stage(&data.bend, last)?;
         }
     }
-    let own_meshes = opts.test_meshes == TestMeshes::Own;
+    let own_meshes = opts.test_meshes != TestMeshes::Ladder;
+    let strict = opts.test_meshes == TestMeshes::Strict;
     if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
         // the ladder's measured check was made on the meshes before the per-test refinement
         f.ladder_check = None;
@@ -645,7 +646,7 @@ pub fn fit(
         // a fit the check fails refines the strips of the stages it would move, then is
         // checked again
         while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
-            if !refine::refine_for_check(&mut f, &maps, &sets, last, m)? {
+            if !refine::refine_for_check(&mut f, &maps, &sets, last, m, strict)? {
                 break;
             }
             let t0 = Instant::now();

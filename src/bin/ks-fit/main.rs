@@ -266,9 +266,11 @@ enum Command {
         grading: kshell::mesh::Grading,
         /// Each test's mesh: `own` (after the ladder, every strip whose estimated mesh error is
         /// above a third of its fit error and 0.3 % is refined, faces doubled across and along,
-        /// at most twice, and its stage refitted; so are the strips of a stage that the mesh
-        /// check would move by 1 % or more) or `ladder` (every strip on the ladder's last level).
-        /// `[[fit.test]]` mesh names each test's real mesh.
+        /// at most three times and to 4096 faces, and its stage refitted; so are the strips of a
+        /// stage that the mesh check would move by 1 % or more), `strict` (as `own`, and the
+        /// strip of a fitted curve that the mesh check moves by 0.3 % or more refined too: the
+        /// check's curve criterion met, at a cost measured in the README) or `ladder` (every
+        /// strip on the ladder's last level). `[[fit.test]]` mesh names each test's real mesh.
         #[arg(long, value_enum, default_value = "own")]
         test_meshes: kshell::fit::TestMeshes,
         /// How every solve integrates the yarn (warp, weft, a12) terms: full (4 × 4 Gauss
