@@ -497,6 +497,22 @@ fn curve_paths_stay_inside_the_dataset_folder() {
     refused(&["check", s(&toml)], "outside the dataset folder");
     let (rc, out, err) = ks_fit(&["check", s(&toml), "--allow-outside"]);
     assert_eq!(rc, 0, "{out}{err}");
+    // a triangle model's fit refuses it too, and honours --allow-outside (it ignored the flag)
+    refused(
+        &["fit", s(&toml), "--model", "springs"],
+        "outside the dataset folder",
+    );
+    let fitted = dir.join("outside-springs.toml");
+    let (_, out, err) = ks_fit(&[
+        "fit",
+        s(&toml),
+        "--model",
+        "springs",
+        "--allow-outside",
+        "-o",
+        s(&fitted),
+    ]);
+    assert!(!err.contains("outside the dataset folder"), "{out}{err}");
     write("/etc/passwd");
     let err = refused(&["check", s(&toml)], "outside the dataset folder");
     assert!(!err.contains("root:"), "the error echoes the file: {err}");
@@ -555,6 +571,11 @@ fn a_fit_that_misses_its_target_says_so_and_exits_3() {
     );
     refused(
         &["fit", s(&toml), "--max-error", "0"],
+        "--max-error must be a percentage",
+    );
+    // a triangle model's fit checks it too (it took any value)
+    refused(
+        &["fit", s(&toml), "--model", "springs", "--max-error", "2000"],
         "--max-error must be a percentage",
     );
 }

@@ -101,9 +101,9 @@ pub struct FitOptions {
     /// Meshes of a 50 × 75 mm strip, coarse to fine; other strips keep the element size.
     pub ladder: Vec<(usize, usize)>,
     pub method: Method,
-    /// Skip a finer level when it changes (measured, for the second level) or would change
-    /// (estimated at order 1.5 from the last change, for later levels) the fitted forces by
-    /// less than this, mean relative. Default 1 %: below the repeat-to-repeat scatter of
+    /// Skip a finer level when it changes the fitted forces by less than this, mean relative
+    /// (measured, for the second level); later levels are estimated from the last change at
+    /// the mesh check's order (`mesh_check::order`) and judged by its 1 % / 0.3 % rule. Default 1 %: below the repeat-to-repeat scatter of
     /// real tests and the paper's fit errors (Table 3: 1–5 %).
     pub skip_tol: f64,
     /// A degree is raised only if that lowers the mean relative error by at least this factor.
@@ -155,7 +155,7 @@ impl Default for FitOptions {
             max_degree: 3,
             fixed_degree: None,
             ladder: vec![(8, 12), (16, 24)],
-            method: Method::Bfgs,
+            method: Method::Hybrid,
             skip_tol: 1e-2,
             degree_gain: 0.7,
             degree_good: 2e-3,

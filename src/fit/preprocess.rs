@@ -4,8 +4,8 @@
 //!
 //! **Toe compensation.** A hand-mounted strip starts slack (the force rises slowly before the
 //! strip is taut) or preloaded (a force at zero elongation). Both shift the elongation axis.
-//! The start of the curve (the points from 2 % to 40 % of the largest force; below 2 % a slack
-//! strip creeps) is fitted twice by least
+//! The start of the curve (the points from 2 % to 40 % of the largest force, widened to 60, 80
+//! and 100 % where fewer than 8 points lie there; below 2 % a slack strip creeps) is fitted twice by least
 //! squares: by a cubic through the origin, and by a hinge, zero up to an elongation s and a
 //! cubic in (e − s) after it, s found by a search. When the hinge fits at least ten times
 //! better (residual sum of squares) the curve has a toe (a slack one only when at least two

@@ -24,11 +24,7 @@ pub fn fit_options(
     nodes: usize,
     max_error_percent: f64,
 ) -> Result<kshell::fit::FitOptions, String> {
-    if !(max_error_percent.is_finite() && max_error_percent > 0.0 && max_error_percent <= 1000.0) {
-        return Err(format!(
-            "--max-error must be a percentage in (0, 1000], got {max_error_percent:?}"
-        ));
-    }
+    let max_error = max_error_fraction(max_error_percent)?;
     if max_degree == 0 || fixed_degree == Some(0) {
         return Err("degrees start at 1 (--max-degree, --degree)".into());
     }
@@ -58,9 +54,20 @@ pub fn fit_options(
         repeats,
         max_misalign_deg: max_misalign,
         nodes,
-        max_error: max_error_percent / 100.0,
+        max_error,
         ..kshell::fit::FitOptions::default()
     })
+}
+
+/// `--max-error` (a percentage in (0, 1000]) as a fraction.
+pub fn max_error_fraction(percent: f64) -> Result<f64, String> {
+    if percent.is_finite() && percent > 0.0 && percent <= 1000.0 {
+        Ok(percent / 100.0)
+    } else {
+        Err(format!(
+            "--max-error must be a percentage in (0, 1000], got {percent:?}"
+        ))
+    }
 }
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.

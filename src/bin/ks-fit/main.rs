@@ -205,7 +205,7 @@ enum Command {
         #[arg(long, default_value = "8x12,16x24")]
         mesh_ladder: String,
         /// Minimiser: hybrid (Gauss–Newton while it makes fast progress, BFGS updates after),
-        /// bfgs or gauss-newton; every one uses a strong-Wolfe line search.
+        /// bfgs or gauss-newton (also `gn`); every one uses a strong-Wolfe line search.
         #[arg(long, default_value = "hybrid")]
         method: kshell::fit::optim::Method,
         /// No progress lines.
@@ -252,7 +252,8 @@ enum Command {
         bending: kshell::fit::BendingMode,
         /// Mesh check (`[fit]` mesh_change: how much refining the last level once more would
         /// change the fit): `coarse` (one solve of every fitted test on the mesh half as fine,
-        /// carried to the finer one at order 2 on graded cages, 1.2 on uniform ones), `fine`
+        /// carried to the finer one at order 2 on graded cages, 1.2 on uniform ones, 0.8 with the
+        /// yarn terms on the face centres), `fine`
         /// (solved on the mesh twice as fine: measured, several times the cost) or `off`.
         /// Where the ladder stopped because the next level was solved and not needed, that
         /// measured check is reported instead (in either mode but `off`).
@@ -266,16 +267,18 @@ enum Command {
         grading: kshell::mesh::Grading,
         /// Each test's mesh: `own` (after the ladder, every strip whose estimated mesh error is
         /// above a third of its fit error and 0.3 % is refined, faces doubled across and along,
-        /// at most three times and to 4096 faces, and its stage refitted; so are the strips of a
-        /// stage that the mesh check would move by 1 % or more), `strict` (as `own`, and the
+        /// at most three times and to 4096 faces, and its stage refitted; so is a stage's strip
+        /// with the largest estimated mesh error where the mesh check would move the stage by
+        /// 1 % or more, and the bends where it would move a thickness or rigidity by 1 % or a
+        /// drape angle by 0.1°), `strict` (as `own`, and the
         /// strip of a fitted curve that the mesh check moves by 0.3 % or more refined too: the
         /// check's curve criterion met, at a cost measured in the README) or `ladder` (every
         /// strip on the ladder's last level). `[[fit.test]]` mesh names each test's real mesh.
         #[arg(long, value_enum, default_value = "own")]
         test_meshes: kshell::fit::TestMeshes,
         /// How every solve integrates the yarn (warp, weft, a12) terms: full (4 × 4 Gauss
-        /// points per face), centre (one point per face: no locking on nearly inextensible
-        /// yarns) or auto (centre when the bootstrapped yarn-to-shear ratio max(a11, a22)/G12
+        /// points per face), centre (also `center`; one point per face: no locking on nearly
+        /// inextensible yarns) or auto (centre when the bootstrapped yarn-to-shear ratio max(a11, a22)/G12
         /// is 200 or more; a note says so).
         #[arg(long, default_value = "auto")]
         yarn_rule: kshell::assembly::YarnRule,
@@ -296,14 +299,15 @@ enum Command {
         /// The joint sweep: after the first mesh's staged fit, the warp and weft stages are
         /// refitted over the off-axis strips too (which load the yarns), then the shear stage,
         /// and finer meshes fit each stage over those strips: on, off (the paper's staged
-        /// fit) or auto (on unless --protocol paper).
+        /// fit) or auto (on unless --protocol paper, or where the tension–shear coupling is kept:
+        /// its shear stage fits the yarn and shear terms together).
         #[arg(long, value_enum, default_value = "auto")]
         joint: kshell::fit::Joint,
         /// Cloth model fitted: kl (the subdivision shell, everything above applies), or a
         /// triangle model (springs, soft-constraints, stvk-ds, xpbd), fitted in Miguel et al.
-        /// 2012's staged order on 16-faces-wide strips (default output
-        /// <dataset name>-<model>-fit.toml; the options above other than -o and --quiet are the
-        /// shell's).
+        /// 2012's staged order on strips 8 cells (16 triangles) across (default output
+        /// <dataset name>-<model>-fit.toml; the options above other than -o, --quiet,
+        /// --max-error and --allow-outside are the shell's).
         #[arg(long, default_value = "kl")]
         model: String,
     },
@@ -478,15 +482,19 @@ fn main() -> ExitCode {
             quiet,
             model,
             max_error,
+            allow_outside,
             ..
-        } if model != "kl" => models::fit(
-            &file,
-            output.as_deref(),
-            &model,
-            quiet,
-            force,
-            max_error / 100.0,
-        ),
+        } if model != "kl" => fabric::max_error_fraction(max_error).and_then(|max_error| {
+            models::fit(
+                &file,
+                output.as_deref(),
+                &model,
+                quiet,
+                force,
+                allow_outside,
+                max_error,
+            )
+        }),
         Command::Fit {
             file,
             output,

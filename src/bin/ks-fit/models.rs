@@ -124,12 +124,14 @@ pub fn fit(
     model: &str,
     quiet: bool,
     force: bool,
+    allow_outside: bool,
     max_error: f64,
 ) -> Result<bool, String> {
     use kshell::tri::fit::{fit_tri, TriFitOptions};
     use std::fmt::Write;
     let kind: TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
-    let (data, warnings) = kshell::dataset::load_dataset(file).map_err(|e| e.to_string())?;
+    let (data, warnings) =
+        kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
     let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
         std::path::PathBuf::from(format!(
             "{}-{}-fit.toml",

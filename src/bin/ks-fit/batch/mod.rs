@@ -29,8 +29,8 @@ pub struct BatchArgs {
     /// The manifest: CSV with the columns `fabric` (the fabric's folder name under --out) and
     /// `dataset` (its fabric.toml, relative to the manifest's folder), then any of the fit
     /// options model, max_degree, degree, mesh_ladder, method, protocol, toe, repeat,
-    /// max_misalign, nodes, max_error, strategy, bending, mesh_check, grading, test_meshes (an empty cell
-    /// keeps the default). Lines starting with # are comments.
+    /// max_misalign, nodes, max_error, strategy, bending, mesh_check, grading, test_meshes,
+    /// yarn_rule, shear_coupling, objective, joint (an empty cell keeps the default). Lines starting with # are comments.
     manifest: PathBuf,
     /// Output folder: one folder per fabric, summary.csv and index.html.
     #[arg(long)]
