@@ -756,6 +756,7 @@ fn strict_test_meshes_refine_the_strips_whose_curves_the_mesh_check_moves() {
     assert!(rc == 0 || rc == 3, "{out}{err}");
     let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
     let f = doc["fit"].as_table().unwrap();
+    assert_eq!(f["test_meshes"].as_str(), Some("strict"), "{f:?}");
     let notes: Vec<&str> = f["notes"]
         .as_array()
         .unwrap()

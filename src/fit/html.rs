@@ -358,6 +358,7 @@ mod tests {
             shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
             objective: crate::fit::Misfit::Relative,
             joint: false,
+            test_meshes: crate::fit::TestMeshes::Own,
         };
         let png = vec![0x89, b'P', b'N', b'G', 1, 2, 3];
         let fig = Figure {

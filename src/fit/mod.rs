@@ -271,6 +271,8 @@ pub struct FitResult {
     pub objective: Misfit,
     /// whether the yarn stages were fitted over the off-axis strips too (`--joint`, as decided)
     pub joint: bool,
+    /// each test's mesh (`--test-meshes`)
+    pub test_meshes: TestMeshes,
 }
 
 /// Smallest and largest membrane strain (Ẽ11, Ẽ22, Ẽ12) a test exercised.
@@ -693,5 +695,6 @@ pub fn fit(
         shear_coupling: f.coupling,
         objective: f.prep.misfit,
         joint: sets.joint.is_some(),
+        test_meshes: opts.test_meshes,
     })
 }

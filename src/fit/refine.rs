@@ -48,6 +48,17 @@ pub enum TestMeshes {
     Ladder,
 }
 
+impl TestMeshes {
+    /// The flag value's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Own => "own",
+            Self::Strict => "strict",
+            Self::Ladder => "ladder",
+        }
+    }
+}
+
 /// The most times one strip's mesh is doubled beyond the ladder's last level.
 pub(super) const MAX_DOUBLINGS: u32 = 3;
 /// A strip is not refined past this many faces (a 64 × 64 cage: a few seconds a solve).

@@ -56,6 +56,11 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
         "joint = {}    # the warp and weft stages refitted over the off-axis strips too (--joint; auto as decided)",
         r.joint
     );
+    let _ = writeln!(
+        s,
+        "test_meshes = {}    # each test's mesh (--test-meshes): own, strict (a curve the mesh check moves by 0.3 % refines its strip too) or ladder",
+        toml_str(r.test_meshes.name())
+    );
     if let crate::fit::coupling::CouplingOutcome::Kept { without, with }
     | crate::fit::coupling::CouplingOutcome::Rejected { without, with, .. } = &r.shear_coupling
     {

@@ -212,6 +212,7 @@ mod tests {
             shear_coupling: crate::fit::coupling::CouplingOutcome::Off,
             objective: crate::fit::Misfit::Relative,
             joint: false,
+            test_meshes: crate::fit::TestMeshes::Own,
         }
     }
 
