@@ -7,6 +7,16 @@ mod common;
 
 use common::{folder, ks_fit, s};
 
+/// The `[fit]` table's notes.
+fn notes_of(fit: &toml::Table) -> Vec<&str> {
+    fit["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n.as_str())
+        .collect()
+}
+
 /// A degree-2 material (warp and weft stiffen, shear stiffens strongly), no cut-offs.
 const DEGREE2: &str = "name = \"degree-2\"
 areal_density_g_m2 = 103.6
@@ -498,12 +508,7 @@ fn the_mesh_check_predicts_the_refit_on_the_finer_mesh() {
     // the 45° strip is far from converged on 4 × 6: the check says so
     let change = value(f, "mesh_change");
     assert!(change >= largest - 1e-12 && change > 0.1, "{change}");
-    let notes: Vec<&str> = f["notes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|v| v.as_str())
-        .collect();
+    let notes = notes_of(f);
     assert!(
         notes
             .iter()
@@ -666,12 +671,7 @@ fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     // warned about by name
     let f = own["fit"].as_table().unwrap();
     assert_eq!(f["yarn_rule"].as_str(), Some("full"), "{f:?}");
-    let notes: Vec<&str> = f["notes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|n| n.as_str())
-        .collect();
+    let notes = notes_of(f);
     assert!(
         notes.iter().any(|n| n.contains("nothing interpolated")),
         "{notes:?}"
@@ -757,12 +757,7 @@ fn strict_test_meshes_refine_the_strips_whose_curves_the_mesh_check_moves() {
     let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
     let f = doc["fit"].as_table().unwrap();
     assert_eq!(f["test_meshes"].as_str(), Some("strict"), "{f:?}");
-    let notes: Vec<&str> = f["notes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter_map(|n| n.as_str())
-        .collect();
+    let notes = notes_of(f);
     assert!(
         notes
             .iter()
