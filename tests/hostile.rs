@@ -579,3 +579,51 @@ fn a_fit_that_misses_its_target_says_so_and_exits_3() {
         "--max-error must be a percentage",
     );
 }
+
+/// `recommend` checks its strip and cantilever sizes and its angle as `tensile` and `bend` do
+/// (it took any positive size and any angle), and a triangle model's sheet keeps to
+/// `--max-faces` as the shell's does (it built any grid).
+#[test]
+fn recommend_and_triangle_sheets_check_their_inputs() {
+    fn recommend<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        let mut v = vec!["recommend", "--material", MATERIAL];
+        v.extend_from_slice(extra);
+        v
+    }
+    refused(
+        &recommend(&["--scene", "tensile", "--angle", "1000"]),
+        "--angle must be in [-360, 360]",
+    );
+    refused(
+        &recommend(&["--scene", "bend", "--width", "0.01"]),
+        "--width must be at least 0.1 mm",
+    );
+    refused(
+        &recommend(&["--scene", "tensile", "--to", "500"]),
+        "more than twice the gauge length",
+    );
+    refused(
+        &recommend(&["--scene", "picture-frame", "--shear-deg", "85"]),
+        "--shear-deg must be within ±80",
+    );
+    // (a note that the springs were converted from the shell law comes first)
+    let dir = folder("hostile-tri-sheet");
+    let (rc, out, err) = ks_fit(&[
+        "scene",
+        "picture-frame",
+        "--material",
+        MATERIAL,
+        "--model",
+        "springs",
+        "--mesh",
+        "1000",
+        "--out",
+        s(&dir.join("frame")),
+    ]);
+    assert_eq!(rc, 2, "{out}{err}");
+    let last = err.trim_end().lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("ks-fit: error:") && last.contains("--max-faces"),
+        "{err}"
+    );
+}

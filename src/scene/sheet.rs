@@ -89,6 +89,8 @@ impl Sheet<TriModel> {
                 "the sheet needs at least one face each way".into(),
             ));
         }
+        // the same --max-faces as the shell's sheet (cells; each holds two triangles)
+        crate::limits::check_mesh(&format!("mesh {n}x{n}"), n, n).map_err(SceneError::Input)?;
         let model = TriModel::new(TriGrid::rectangle(side, side, n, n), material.clone(), 0.0);
         let rest: Vec<Vec3> = model.grid.rest.iter().map(|p| [p[0], p[1], 0.0]).collect();
         Self::from_parts(model, side, n, rest)

@@ -39,8 +39,9 @@ pub struct TensileStrip {
 /// graded_strip`, example cotton, 50 × 75 mm at 45° pulled 3.75 mm, reference 5.90 N by
 /// Richardson): uniform 16×24 is 4.6 % off and converges at order 1.3 (32×48: 2.0 %); graded
 /// 16×24 is 1.0 % off and converges at order 2.1–2.4 (32×48: 0.3 %), at the same cost per solve.
-/// At 90° the 16×24 error drops from 2.5e-4 to 1.6e-5. The fit's default (`fit --grading`);
-/// the virtual lab commands stay uniform by default. The fit's bias stage used to stall on
+/// At 90° the 16×24 error drops from 2.5e-4 to 1.6e-5. The default of `fit --grading` and of
+/// `tensile` on its automatic mesh; `tensile --mesh`, `converge tensile` and `synth` stay
+/// uniform by default. The fit's bias stage used to stall on
 /// it (a noise-free degree-2 shear at 3.6 %): not the cages but the start of a raised degree,
 /// now space-mapped (`fit::surrogate`).
 pub const STRIP_GRADING: Grading = Grading {

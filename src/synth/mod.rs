@@ -99,8 +99,8 @@ pub struct SynthOptions {
     pub mesh: (usize, usize),
     /// Its grading (uniform by default; see [`crate::scene::STRIP_GRADING`]).
     pub grading: crate::mesh::Grading,
-    /// How the strips integrate the yarn terms (auto by default; the cantilevers always
-    /// decide by the material).
+    /// How the strips integrate the yarn terms (auto by default; the cantilevers always use
+    /// the full rule).
     pub yarn_rule: crate::assembly::YarnRule,
     /// Tensile angles beyond the five of [`SYNTH_TENSILE`] (degrees from the weft, in
     /// [0, 90], none of the five), written after them as `a<angle>-<repeat>.csv`.

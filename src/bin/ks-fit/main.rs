@@ -157,7 +157,8 @@ enum Command {
         #[arg(long, default_value_t = 0.08)]
         max_strain: f64,
     },
-    /// Run the built-in demonstration: the limit basis on the bundled sample shapes.
+    /// Run the built-in demonstration: the limit basis on the bundled sample shapes, then
+    /// virtual tensile and cantilever tests of the example material.
     Demo,
     /// Fit a library of fabrics listed in a manifest CSV: each fabric's material, report, log
     /// and status in OUT/<fabric>/, summary.csv and index.html in OUT, rewritten as fabrics
@@ -361,8 +362,8 @@ enum Command {
         #[arg(long, value_parser = parse_grading, default_value = "0")]
         grading: kshell::mesh::Grading,
         /// How the strips integrate the yarn terms: auto, full or centre (see `fit
-        /// --yarn-rule`; auto decides by the material's yarn-to-shear ratio, as the
-        /// cantilevers always do).
+        /// --yarn-rule`; auto decides by the material's yarn-to-shear ratio; the cantilevers
+        /// always use the full rule).
         #[arg(long, default_value = "auto")]
         yarn_rule: kshell::assembly::YarnRule,
         /// Model the virtual lab runs: kl (the subdivision shell) or a triangle model

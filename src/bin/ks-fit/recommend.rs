@@ -1,12 +1,16 @@
 //! `ks-fit recommend`: the cheapest cloth model and mesh whose error in one lab test is below a
 //! tolerance, with the table it chose from (`kshell::model::compare`).
 
+use crate::scene::mm;
 use kshell::converge::{check_ladder, parse_ladder};
 use kshell::material::load_material;
 use kshell::model::compare::{compare_on, LabTest};
 use kshell::tri::file::{model_only, parse_tri, TriSource};
 use kshell::tri::ZeroStrain;
 use std::path::PathBuf;
+
+/// Largest `--fits` material file read (as the dataset's TOML).
+const MAX_FIT_BYTES: u64 = 16 << 20;
 
 /// How far apart the mean drops of differently folded drapes lie: the example cotton's cowls
 /// on 32² and 48², shell and triangle models, span 553.7–558.9 mm, and one 32² shell cowl lay
@@ -40,8 +44,9 @@ pub struct RecommendArgs {
     /// Elongation of a strip, mm (default 2 % of the gauge length).
     #[arg(long)]
     to: Option<f64>,
-    /// Overhang of a cantilever, mm (default twice the bending length (B/(ρg))^⅓ of the
-    /// material at this angle, about where D1388's 41.5° is reached).
+    /// Overhang of a cantilever, mm (default twice the bending length (B/(ρg))^⅓, about where
+    /// D1388's 41.5° is reached, with B the material's warp rigidity for cuts within 45° of
+    /// the warp and its weft rigidity otherwise).
     #[arg(long)]
     overhang: Option<f64>,
     /// Material files with a fitted triangle model's [model] table (from `ks-fit fit --model`),
@@ -52,7 +57,7 @@ pub struct RecommendArgs {
     /// whose runs take up to minutes each).
     #[arg(long)]
     repeats: Option<usize>,
-    /// Picture frame: final shear angle, degrees (as `scene picture-frame`).
+    /// Picture frame: final shear angle, degrees, within ±80 (as `scene picture-frame`).
     #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
     shear_deg: f64,
     /// Corner pull: final stretch of the diagonal, percent (as `scene corner-pull`).
@@ -80,7 +85,8 @@ pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
     let shell = load_material(&a.material).map_err(|e| e.to_string())?;
     let mut fitted = Vec::new();
     for f in &a.fits {
-        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let text =
+            kshell::io::read_text(f, MAX_FIT_BYTES).map_err(|e| format!("{}: {e}", f.display()))?;
         let kind_name = model_only(&text).ok_or_else(|| {
             format!(
                 "{}: --fits takes files with a [model] table and no shell law (the output of ks-fit fit --model)",
@@ -95,17 +101,11 @@ pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
             TriSource::Shell(_) => unreachable!("model_only said it has a [model] table"),
         }
     }
-    let positive = |name: &str, v: f64| {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
-        } else {
-            Err(format!("{name} must be a positive number of mm, got {v}"))
-        }
-    };
+    let angle = crate::scene::angle_deg(a.angle)?;
     let test = if a.scene == "picture-frame" {
-        if !(a.shear_deg.is_finite() && a.shear_deg.abs() < 89.0) {
+        if !(a.shear_deg.is_finite() && a.shear_deg.abs() <= 80.0) {
             return Err(format!(
-                "--shear-deg must be within ±89°, got {}",
+                "--shear-deg must be within ±80 degrees, got {}",
                 a.shear_deg
             ));
         }
@@ -130,28 +130,36 @@ pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
             span: 0.6,
         }
     } else if a.scene == "tensile" {
-        let width = positive("--width", a.width.unwrap_or(50.0))? * 1e-3;
-        let length = positive("--length", a.length)? * 1e-3;
-        let to = positive("--to", a.to.unwrap_or(0.02 * a.length))? * 1e-3;
+        let width = mm("width", a.width.unwrap_or(50.0))?;
+        let length = mm("length", a.length)?;
+        let to = mm("to", a.to.unwrap_or(0.02 * a.length))?;
+        if to > 2.0 * length {
+            return Err(format!(
+                "--to {} mm is more than twice the gauge length (200 % strain)",
+                to * 1e3
+            ));
+        }
         LabTest::Tensile {
-            angle_deg: a.angle,
+            angle_deg: angle,
             width,
             length,
             elongation: to,
         }
     } else {
-        let width = positive("--width", a.width.unwrap_or(25.0))? * 1e-3;
+        let width = mm("width", a.width.unwrap_or(25.0))?;
         let overhang = match a.overhang {
-            Some(o) => positive("--overhang", o)? * 1e-3,
+            Some(o) => mm("overhang", o)?,
             None => {
                 let b = ZeroStrain::of(&shell)?.bending;
-                let rigidity = if a.angle >= 45.0 { b[0] } else { b[1] };
+                // the cut's angle from the weft folded into [0°, 90°]
+                let from_weft = 90.0 - (angle.rem_euclid(180.0) - 90.0).abs();
+                let rigidity = if from_weft >= 45.0 { b[0] } else { b[1] };
                 let weight = shell.areal_density * kshell::assembly::STANDARD_GRAVITY;
                 2.0 * (rigidity / weight).cbrt()
             }
         };
         LabTest::Bend {
-            angle_deg: a.angle,
+            angle_deg: angle,
             width,
             overhang,
         }

@@ -29,8 +29,8 @@ pub struct SceneArgs {
     pub grading: Option<kshell::mesh::Grading>,
     /// How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per
     /// face), centre (one point per face: a membrane that does not lock when the yarns are
-    /// nearly inextensible and cross the cage), or auto (centre from a yarn-to-shear ratio
-    /// max(a11, a22)/G12 of 200).
+    /// nearly inextensible and cross the cage; also `center`), or auto (centre from a
+    /// yarn-to-shear ratio max(a11, a22)/G12 of 200; a cantilever's auto is always full).
     #[arg(long, default_value = "auto")]
     pub yarn_rule: kshell::assembly::YarnRule,
     /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape
@@ -216,7 +216,7 @@ pub fn mm(name: &str, v: f64) -> Result<f64, String> {
 }
 
 /// A cut angle in [-360, 360] degrees.
-fn angle_deg(v: f64) -> Result<f64, String> {
+pub fn angle_deg(v: f64) -> Result<f64, String> {
     if v.is_finite() && v.abs() <= 360.0 {
         Ok(v)
     } else {

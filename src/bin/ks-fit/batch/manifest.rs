@@ -195,8 +195,10 @@ pub fn inputs_hash(row: &Row) -> Result<String, String> {
         h.add(v.as_bytes());
     }
     let shown = row.dataset.display();
-    let bytes = std::fs::read(&row.dataset).map_err(|e| format!("{shown}: cannot read: {e}"))?;
-    h.add(&bytes);
+    // bounded and regular, as the fit reads it (a FIFO would block the hash forever)
+    let text = kshell::io::read_text(&row.dataset, 16 << 20)
+        .map_err(|e| format!("{shown}: cannot read: {e}"))?;
+    h.add(text.as_bytes());
     if let Ok((data, _)) = kshell::dataset::load_dataset(&row.dataset) {
         let dir = row.dataset.parent().unwrap_or(Path::new(""));
         let files = data.tensile.iter().map(|t| &t.curve);
