@@ -186,7 +186,7 @@ enum Command {
         scenes: bool,
         #[command(flatten)]
         image: render::ImageArgs,
-        /// Highest polynomial degree of each η tried (lowest first).
+        /// Highest polynomial degree of each η tried (lowest first), 1 to 8.
         #[arg(long, default_value_t = 3)]
         max_degree: usize,
         /// Use exactly this degree for every η instead of choosing (for comparisons). Each
@@ -224,17 +224,17 @@ enum Command {
         /// the largest forces for warp and weft, the median for other angles).
         #[arg(long, value_enum, default_value = "all")]
         repeat: kshell::fit::RepeatMode,
-        /// Bound of the misalignment diagnostic of validation runs, degrees (0: off). The
-        /// reported error is always the one at the nominal angle.
+        /// Bound of the misalignment diagnostic of validation runs, degrees in [0, 15] (0: off).
+        /// The reported error is always the one at the nominal angle.
         #[arg(long, default_value_t = 2.0)]
         max_misalign: f64,
         /// Elongation nodes per strip at which the model is solved (interpolated between by
-        /// local quintics); a strip with no more distinct measured elongations than this is
-        /// solved at them.
+        /// local quintics), 4 to 200; a strip with no more distinct measured elongations than
+        /// this is solved at them.
         #[arg(long, default_value_t = 9)]
         nodes: usize,
-        /// Largest acceptable error of a fitted test, percent (mean |relative error| of a
-        /// curve, relative drape-angle error of a bend). Above it the fit still writes the
+        /// Largest acceptable error of a fitted test, percent in (0, 1000] (mean |relative
+        /// error| of a curve, relative drape-angle error of a bend). Above it the fit still writes the
         /// material and report, prints FIT FAILED and exits with code 3.
         #[arg(long, default_value_t = 10.0)]
         max_error: f64,
