@@ -37,7 +37,7 @@ pub fn check_faces(what: &str, faces: usize) -> Result<(), String> {
     if faces > max {
         let gb = faces.saturating_mul(BYTES_PER_FACE) as f64 / 1e9;
         return Err(format!(
-            "{what}: {faces} faces is more than the limit of {max} (it would need about {gb:.1} GB); pass --max-faces to allow a larger mesh"
+            "{what}: {faces} faces is more than the limit of {max} (a shell solve on it would need about {gb:.1} GB); pass --max-faces to allow a larger mesh"
         ));
     }
     Ok(())
