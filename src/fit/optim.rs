@@ -69,6 +69,9 @@ pub struct OptimOptions {
     pub target: f64,
     /// longest step tried, in the ∞-norm of the variables (a trust bound on wild trials)
     pub max_step: f64,
+    /// stop, without trying it, when a (quasi-)Newton step would move every variable by less
+    /// than this (∞-norm): a polish whose optimum is already within it
+    pub xtol: f64,
 }
 
 impl Default for OptimOptions {
@@ -80,6 +83,7 @@ impl Default for OptimOptions {
             gtol: 1e-12,
             target: 0.0,
             max_step: f64::INFINITY,
+            xtol: 0.0,
         }
     }
 }
@@ -151,6 +155,10 @@ fn bfgs(
             // the inverse-Hessian estimate lost definiteness: restart from steepest descent
             h = DMatrix::identity(n, n);
             d = -g.clone();
+        }
+        if scaled && d.amax() < opts.xtol {
+            report.stop = "step below tolerance".into();
+            break;
         }
         if !scaled {
             // first step: a 10 % relative change of ε along steepest descent
@@ -253,6 +261,10 @@ fn hybrid(
                 -&g / b[(0, 0)]
             }
         };
+        if d.amax() < opts.xtol {
+            report.stop = "step below tolerance".into();
+            break;
+        }
         cap(&mut d, opts.max_step);
         let Some((alpha, fa, ga, ja)) = strong_wolfe(&x, f, &g, &d, report, eval) else {
             report.stop = "line search failed".into();
@@ -458,6 +470,10 @@ fn gauss_newton(
             break;
         };
         let mut d = chol.solve(&(-(j.transpose() * &r)));
+        if d.amax() < opts.xtol {
+            report.stop = "step below tolerance".into();
+            break;
+        }
         cap(&mut d, opts.max_step);
         let slope = g.dot(&d);
         let mut alpha = 1.0;
@@ -548,12 +564,54 @@ mod tests {
                 gtol: 1e-10,
                 target: 1e-20,
                 max_step: f64::INFINITY,
+                xtol: 0.0,
             };
             let r = minimize(&mut p, &opts, rosenbrock).unwrap();
             assert!(
                 (p[0] - 1.0).abs() < 1e-6 && (p[1] - 1.0).abs() < 1e-6,
                 "{method:?}: {p:?} after {r:?}"
             );
+        }
+    }
+
+    /// A (quasi-)Newton step shorter than `xtol` is not tried: started 1e-4 from the minimum
+    /// of a linear least-squares problem, every method stops after its first evaluation at
+    /// xtol 1e-3, and steps to the minimum at xtol 1e-5.
+    #[test]
+    fn a_step_shorter_than_xtol_is_not_tried() {
+        let lin = |p: &[f64], jac: bool| -> Result<Evaluation, ()> {
+            Ok(Evaluation {
+                residuals: vec![3.0 * p[0] - 1.0, 0.5 * p[1] + 2.0, p[0] + p[1] - 0.1],
+                jacobian: jac
+                    .then(|| DMatrix::from_row_slice(3, 2, &[3.0, 0.0, 0.0, 0.5, 1.0, 1.0])),
+            })
+        };
+        // the least-squares minimum: (JᵀJ)⁻¹ Jᵀ b
+        let j = DMatrix::from_row_slice(3, 2, &[3.0, 0.0, 0.0, 0.5, 1.0, 1.0]);
+        let b = DVector::from_vec(vec![1.0, -2.0, 0.1]);
+        let best = (j.transpose() * &j)
+            .cholesky()
+            .unwrap()
+            .solve(&(j.transpose() * b));
+        for method in [Method::Bfgs, Method::Hybrid, Method::GaussNewton] {
+            for (xtol, stops) in [(1e-3, true), (1e-5, false)] {
+                let mut p = vec![best[0] + 1e-4, best[1] - 1e-4];
+                let opts = OptimOptions {
+                    method,
+                    xtol,
+                    ..OptimOptions::default()
+                };
+                let r = minimize(&mut p, &opts, lin).unwrap();
+                if stops {
+                    assert_eq!(r.stop, "step below tolerance", "{method:?}");
+                    assert_eq!(r.evaluations, 1, "{method:?}");
+                    assert_eq!(p, vec![best[0] + 1e-4, best[1] - 1e-4], "{method:?}");
+                } else {
+                    assert_ne!(r.stop, "step below tolerance", "{method:?}");
+                    assert!((p[0] - best[0]).abs() < 1e-8, "{method:?}: {p:?} {r:?}");
+                    assert!((p[1] - best[1]).abs() < 1e-8, "{method:?}: {p:?} {r:?}");
+                }
+            }
         }
     }
 

@@ -81,6 +81,7 @@ pub(super) fn homogeneous_fit(
         gtol: 0.0,
         target: 0.0,
         max_step: 2.0,
+        xtol: 0.0,
     };
     let residuals = |q: &[f64], jac: bool| -> Result<(Vec<f64>, Vec<Vec<f64>>), ()> {
         let mut law = base.clone();
