@@ -740,19 +740,20 @@ fn a_fixed_degree_is_fitted_whatever_its_start_finds() {
     assert_eq!(law["mu"].as_array().unwrap().len(), 2, "{law:?}");
 }
 
-/// `--test-meshes strict` refines the strip of a fitted curve that the mesh check moves by
-/// 0.3 % or more, and the check then passes. On the bundled denim the default `own` leaves its
-/// 67.5° and 45° curves moving by 0.40 % and warns (measured, `paper_repro/fit_speed/strict.md`);
-/// strict refines both strips to 32 × 48 and the curves move by 0.19 %.
+/// The default per-test meshes (`--test-meshes strict`) refine the strip of a fitted curve
+/// that the mesh check moves by 0.3 % or more, and the check then passes. On the bundled denim
+/// `own` leaves its 67.5° and 45° curves moving by 0.40 % and warns (measured,
+/// `paper_repro/fit_speed/strict.md`); strict refines both strips to 32 × 48 and the curves
+/// move by 0.19 %.
 #[test]
-fn strict_test_meshes_refine_the_strips_whose_curves_the_mesh_check_moves() {
+fn default_test_meshes_refine_the_strips_whose_curves_the_mesh_check_moves() {
     let dir = folder("fit-strict-meshes");
     let fitted = dir.join("denim-strict.toml");
     let fabric = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/paper_repro/fabrics/denim/fabric.toml"
     );
-    let (rc, out, err) = ks_fit(&["fit", fabric, "-o", s(&fitted), "--test-meshes", "strict"]);
+    let (rc, out, err) = ks_fit(&["fit", fabric, "-o", s(&fitted)]);
     assert!(rc == 0 || rc == 3, "{out}{err}");
     let doc: toml::Table = std::fs::read_to_string(&fitted).unwrap().parse().unwrap();
     let f = doc["fit"].as_table().unwrap();

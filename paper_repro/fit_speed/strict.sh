@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The bundled fabrics fitted with the default per-test meshes (--test-meshes own) and with
-# --test-meshes strict (a fitted curve that the mesh check moves by 0.3 % has its strip refined
-# too), one after the other on the same machine; writes strict.md: wall time, Newton
+# The bundled fabrics fitted with --test-meshes own and with the default --test-meshes strict
+# (a fitted curve that the mesh check moves by 0.3 % has its strip refined too), one after the
+# other on the same machine; writes strict.md: wall time, Newton
 # iterations, the mesh check's parameter and curve changes, G12, and the strips each refined.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -13,10 +13,10 @@ trap 'rm -rf "$tmp"' EXIT
 key() { awk -v k="$2" '$1 == k { print $3; exit }' "$1"; }
 g12() { awk '$1 == "g12_pa" && $3 != "{" { print $3; exit }' "$1"; }
 {
-  echo "# \`--test-meshes strict\` against the default \`own\` on the bundled fabrics"
+  echo "# \`--test-meshes strict\` (the default) against \`own\` on the bundled fabrics"
   echo
   echo "Machine: $(nproc) cores. Command: \`bash paper_repro/fit_speed/strict.sh\`. Each fabric fitted"
-  echo "with the default settings, then with \`--test-meshes strict\`. mesh_change: the mesh check's"
+  echo "with \`--test-meshes own\`, then with \`strict\` (the default). mesh_change: the mesh check's"
   echo "largest change of a determined parameter (of which), curves: its largest change of a"
   echo "fitted curve after the refit (warned at 0.3 %); G12 change: strict's G12 against own's."
   echo

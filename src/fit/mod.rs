@@ -172,7 +172,7 @@ impl Default for FitOptions {
             bending: BendingMode::Auto,
             mesh_check: MeshCheckMode::default(),
             grading: crate::scene::STRIP_GRADING,
-            test_meshes: TestMeshes::Own,
+            test_meshes: TestMeshes::Strict,
             yarn_rule: crate::assembly::YarnRule::Auto,
             shear_coupling: coupling::CouplingMode::Auto,
             objective: Objective::Auto,

@@ -8,16 +8,17 @@
 //! 2. a fit whose mesh check fails on the material (a determined quantity of a stage moving by
 //!    1 % or more) has that stage's strip with the largest estimated mesh error refined and
 //!    refitted, and is checked again (the bends likewise for the thickness or rigidities, or a
-//!    drape angle moving by 0.1°). By default a curve moving by 0.3 % alone is reported, not
-//!    refined;
-//! 3. with `--test-meshes strict`, a fitted curve that the check moves by 0.3 % or more has its
-//!    strip refined and refitted too, and the fit is checked again. Measured on the bundled
-//!    fabrics (`paper_repro/fit_speed/strict.md`): it meets the curve criterion on all five and
-//!    lowers the estimated change of G12 from 0.84–0.90 % to 0.23–0.28 % on the three whose 45°
-//!    strip it refines, but the cotton's 67.5° strip wrinkles on 32 × 48 (one point took 160
-//!    Newton iterations of a wrinkle pattern crawling, its energy falling by 5e-7 of itself
-//!    after the residual had reached 8e-8), and that fit takes 3.5 times as long for a G12 that
-//!    moves by 0.01 %; so it is not the default.
+//!    drape angle moving by 0.1°);
+//! 3. a fitted curve that the check moves by 0.3 % or more has its strip refined and refitted
+//!    too, and the fit is checked again (the default, `--test-meshes strict`; with `own` such a
+//!    curve is reported, not refined). Measured on the bundled fabrics
+//!    (`paper_repro/fit_speed/strict.md`): it meets the curve criterion on all five, where
+//!    `own` leaves four at 0.32–0.44 %, and lowers the estimated change of G12 from 0.84–0.90 %
+//!    to 0.23–0.28 % on the three whose 45° strip it refines. It costs most on the cotton,
+//!    whose 67.5° strip wrinkles on 32 × 48 (one point takes 160 Newton iterations of a wrinkle
+//!    pattern crawling, its energy falling by 5e-7 of itself after the residual has reached
+//!    8e-8): that fit takes about twice as long as with `own`, for a G12 that the refit would
+//!    move by 0.06 % (under [`super::POLISH_XTOL`], so the step is not taken).
 //!
 //! A strip is doubled at most [`MAX_DOUBLINGS`] times and never past [`MAX_FACES`]; one left
 //! above its tolerance keeps the report's warning, a check still failing keeps its own.
@@ -37,12 +38,11 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TestMeshes {
     /// every strip refined on its own until its estimate meets its tolerance, and the stages
-    /// a failed mesh check moves refined too (the module doc)
-    #[default]
+    /// a failed mesh check moves refined too (the module doc's steps 1 and 2)
     Own,
     /// as `own`, and a strip whose fitted curve the mesh check moves by 0.3 % or more refined
-    /// too, until the check passes (the module doc's step 3: the curve criterion met
-    /// at a measured cost)
+    /// too, until the check passes (the module doc's step 3: the curve criterion)
+    #[default]
     Strict,
     /// every strip on the ladder's last level (the mesh check and warnings still report)
     Ladder,
