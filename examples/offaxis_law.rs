@@ -191,6 +191,7 @@ fn fit(
         gtol: 1e-14,
         target: 0.0,
         max_step: 0.5,
+        xtol: 0.0,
     };
     let mut best: Option<(f64, Vec<f64>)> = None;
     let shifts: &[f64] = if from.is_some() {
