@@ -295,6 +295,10 @@ const TRIAL_RETRY_ITERATIONS: usize = 100;
 /// pattern turned saddle under that change): the refit took 51 s where its one evaluation
 /// takes 20, and the fit 79.8 s where it now takes 45.2; no fitted value of the ten bundled
 /// fits (`own` and `strict`) moved by more than 7.7e-4 (`paper_repro/fit_speed/strict.sh`).
+/// It is not free everywhere: on `paper_repro/mesh_independence`'s noise-free cotton it
+/// stopped the 16 × 24 polish a step earlier, and the refit on the strips' own meshes then
+/// took another path (12 evaluations against 9; 146 against 116 s, G12 −0.45 against
+/// −0.42 % of the true value).
 const POLISH_XTOL: f64 = 1e-3;
 
 /// Strips cut within this many degrees of each other share warm starts.

@@ -37,11 +37,12 @@ use std::time::Instant;
 /// Each test's mesh (`fit --test-meshes`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TestMeshes {
-    /// every strip refined on its own until its estimate meets its tolerance, and the stages
-    /// a failed mesh check moves refined too (the module doc's steps 1 and 2)
+    /// every strip refined on its own until its mesh-error estimate meets its tolerance, and
+    /// the strip that moves a stage in a failed mesh check refined too (the module doc's
+    /// steps 1 and 2)
     Own,
-    /// as `own`, and a strip whose fitted curve the mesh check moves by 0.3 % or more refined
-    /// too, until the check passes (the module doc's step 3: the curve criterion)
+    /// as `own`, and the strip of a fitted curve that the mesh check moves by 0.3 % or more
+    /// refined too, until the check passes (step 3; the default)
     #[default]
     Strict,
     /// every strip on the ladder's last level (the mesh check and warnings still report)
