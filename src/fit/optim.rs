@@ -6,6 +6,11 @@
 //! The problem hands back residuals and, when asked, their Jacobian; a failed evaluation (a
 //! solve that did not converge at a wild trial point) counts as +∞ and makes the line search
 //! step back.
+//!
+//! Each stops at an iteration limit, an objective target, a gradient tolerance, a step that
+//! lowers ε by less than a fraction of itself, or (`xtol`) before trying a (quasi-)Newton
+//! step that would move every variable by less than a tolerance: a polish whose optimum is
+//! that near gains nothing from the line search's evaluations.
 
 use nalgebra::{DMatrix, DVector};
 
