@@ -161,8 +161,8 @@ fn bfgs(
             h = DMatrix::identity(n, n);
             d = -g.clone();
         }
-        if scaled && d.amax() < opts.xtol {
-            report.stop = "step below tolerance".into();
+        if let Some(stop) = stop_before_trial(&d, opts).filter(|_| scaled) {
+            report.stop = stop.into();
             break;
         }
         if !scaled {
@@ -220,6 +220,12 @@ fn stop_before_step(f: f64, g: &DVector<f64>, opts: &OptimOptions) -> Option<&'s
     }
 }
 
+/// Why not to try the (quasi-)Newton step d, if so: it moves every variable by less than
+/// `xtol`.
+fn stop_before_trial(d: &DVector<f64>, opts: &OptimOptions) -> Option<&'static str> {
+    (d.amax() < opts.xtol).then_some("step below tolerance")
+}
+
 /// Shortens d to ∞-norm `max_step` if it is longer.
 fn cap(d: &mut DVector<f64>, max_step: f64) {
     let m = d.amax();
@@ -266,8 +272,8 @@ fn hybrid(
                 -&g / b[(0, 0)]
             }
         };
-        if d.amax() < opts.xtol {
-            report.stop = "step below tolerance".into();
+        if let Some(stop) = stop_before_trial(&d, opts) {
+            report.stop = stop.into();
             break;
         }
         cap(&mut d, opts.max_step);
@@ -475,8 +481,8 @@ fn gauss_newton(
             break;
         };
         let mut d = chol.solve(&(-(j.transpose() * &r)));
-        if d.amax() < opts.xtol {
-            report.stop = "step below tolerance".into();
+        if let Some(stop) = stop_before_trial(&d, opts) {
+            report.stop = stop.into();
             break;
         }
         cap(&mut d, opts.max_step);

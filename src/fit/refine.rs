@@ -38,11 +38,11 @@ use std::time::Instant;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum TestMeshes {
     /// every strip refined on its own until its mesh-error estimate meets its tolerance, and
-    /// the strip that moves a stage in a failed mesh check refined too (the module doc's
-    /// steps 1 and 2)
+    /// the strip that moves a stage in a failed mesh check refined too; a curve the check
+    /// moves by 0.3 % is reported, not refined
     Own,
     /// as `own`, and the strip of a fitted curve that the mesh check moves by 0.3 % or more
-    /// refined too, until the check passes (step 3; the default)
+    /// refined too, until the check passes (the default)
     #[default]
     Strict,
     /// every strip on the ladder's last level (the mesh check and warnings still report)
