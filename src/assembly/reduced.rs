@@ -23,9 +23,12 @@
 //! So a fraction β = min(1, [`HOURGLASS_RATIO`]/ratio) of the yarn part stays on the Gauss
 //! points (the centres carry 1 − β): the freed modes see a yarn stiffness of 20 shears, as
 //! the full rule would at a ratio of 20, where it does not lock. With it that strip takes
-//! 10–13 iterations per step. β is fixed when the rule is set, by the law at that moment, so
-//! each model's energy stays one function of the positions and the parameters (and the
-//! sensitivities exact); a fit's rigs built at different stages may differ in β.
+//! 10–13 iterations per step. β is fixed when the rule is set, by the law at that moment or
+//! by a ratio the caller pins ([`ShellModel::set_yarn_rule_at`]), so each model's energy stays
+//! one function of the positions and the parameters (and the sensitivities exact). A fit pins
+//! its bootstrapped law's ratio, so that all its strips share one discretisation: with β
+//! from each rig's own law, a 30° strip on 4 × 6 set up at a ratio of 50 and one set up at 150
+//! differed by 12 % in force at the same law.
 
 use super::{Accumulator, FaceScratch, ModelError, ShellModel, Want};
 use crate::material::OutOfDomain;
@@ -36,8 +39,8 @@ use crate::Vec3;
 /// How the yarn (warp, weft, a₁₂) terms of the membrane are integrated over a face.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum YarnRule {
-    /// [`YarnRule::Centre`] when the law's yarns are at least [`CENTRE_FROM_RATIO`] times
-    /// stiffer than its shear, else [`YarnRule::Full`].
+    /// [`YarnRule::Centre`] when the law's yarns are more than [`CENTRE_FROM_RATIO`] times
+    /// stiffer than its shear, else [`YarnRule::Full`] (which the centre rule is below it).
     #[default]
     Auto,
     /// The full Gauss rule, like every other term (the paper's discretisation).
@@ -46,21 +49,26 @@ pub enum YarnRule {
     Centre,
 }
 
-/// The yarn-to-shear stiffness ratio max(a₁₁, a₂₂)/G₁₂ from which [`YarnRule::Auto`] puts
-/// the yarn terms on the face centres. Measured on a 50 × 75 mm strip at 45° pulled 5 %,
-/// graded cages (`paper_repro/convergence/stiff_bias/yarn_rules.md`), the force's estimated
-/// error on 16 × 24 / 64 × 96: at a ratio of 50 the full rule 1.0 % / 0.086 %, the centre
-/// rule 0.54 % / 0.033 %; at 200 the full rule 3.6 % / 0.27 % against 1.1 % / 0.071 %; at
-/// 1000 12 % / 0.98 % against 2.4 % / 1.0 % (neither extrapolation settled there). At 90°
-/// the full rule is the more accurate (1e-5 against 9e-5 on 16 × 24), so below 200 it stays.
-pub const CENTRE_FROM_RATIO: f64 = 200.0;
+/// The yarn-to-shear stiffness ratio max(a₁₁, a₂₂)/G₁₂ above which [`YarnRule::Auto`] puts
+/// the yarn terms on the face centres: [`HOURGLASS_RATIO`], below which the centre rule keeps
+/// the whole yarn part on the Gauss points (β = 1) and is the full rule. Measured on a 50 ×
+/// 75 mm strip at 45° pulled 5 %, graded cages (`paper_repro/convergence/stiff_bias/
+/// yarn_rules.md`), the force's estimated error on 16 × 24 / 64 × 96: at a ratio of 50 the
+/// full rule 1.0 % / 0.086 %, the centre rule 0.54 % / 0.033 %; at 200 the full rule 3.6 % /
+/// 0.27 % against 1.1 % / 0.071 %; at 1000 12 % / 0.98 % against 2.4 % / 1.0 % (neither
+/// extrapolation settled there); 30°, 45° and 60° strips of the coupled materials of
+/// `paper_repro/off_axis/yarn_rules.md` on 32 × 48: at a ratio of 30 the centre rule 0.21–0.25 %
+/// against 0.28–0.37 %, at 100 0.01–0.10 % against 0.03–0.52 %. At 0° and 90° the full rule is the
+/// more accurate (1e-5 against 9e-5 on 16 × 24), but a fit's error is its off-axis strips'.
+/// (200 until 2026-12-06.)
+pub const CENTRE_FROM_RATIO: f64 = HOURGLASS_RATIO;
 
 impl YarnRule {
     /// `Auto` decided for a law of yarn-to-shear ratio `ratio` (`None`: unknown, full rule).
     pub fn resolve(self, ratio: Option<f64>) -> YarnRule {
         match self {
             YarnRule::Auto => match ratio {
-                Some(r) if r >= CENTRE_FROM_RATIO => YarnRule::Centre,
+                Some(r) if r > CENTRE_FROM_RATIO => YarnRule::Centre,
                 _ => YarnRule::Full,
             },
             rule => rule,
@@ -76,6 +84,19 @@ impl YarnRule {
     pub fn for_bending(self) -> YarnRule {
         match self {
             YarnRule::Auto => YarnRule::Full,
+            rule => rule,
+        }
+    }
+
+    /// The rule a tensile strip cut at `angle_deg` from the weft takes: `Auto` means the full
+    /// rule where the yarns run along the cage (0° and 90°, nothing to lock; the full rule's
+    /// error there is the smaller, 1e-5 against 9e-5 on 16 × 24, and the centre rule's
+    /// 90° force at a ratio of 50 did not converge monotonically from 8 × 12 to 32 × 48, by
+    /// 1e-4 of itself), and is decided by the ratio elsewhere.
+    pub fn for_strip(self, angle_deg: f64) -> YarnRule {
+        let aligned = (angle_deg / 90.0 - (angle_deg / 90.0).round()).abs() < 1e-9;
+        match self {
+            YarnRule::Auto if aligned => YarnRule::Full,
             rule => rule,
         }
     }
@@ -136,15 +157,35 @@ pub(super) struct Centres {
 pub const HOURGLASS_RATIO: f64 = 20.0;
 
 impl ShellModel {
-    /// Chooses how the yarn terms are integrated (see the module doc); `Auto` is decided by
-    /// the current law.
+    /// Chooses how the yarn terms are integrated (see the module doc); `Auto` and the centre
+    /// rule's β are decided by the current law.
     pub fn set_yarn_rule(&mut self, rule: YarnRule) -> Result<(), ModelError> {
-        let rule = rule.resolve(self.law.yarn_shear_ratio());
-        if rule == self.yarn_rule() {
+        self.set_yarn_rule_at(rule, None)
+    }
+
+    /// [`ShellModel::set_yarn_rule`] with `Auto` and β decided by the yarn-to-shear ratio
+    /// `ratio` instead (`None`: the current law's), so that models built for different laws
+    /// can share one discretisation.
+    pub fn set_yarn_rule_at(
+        &mut self,
+        rule: YarnRule,
+        ratio: Option<f64>,
+    ) -> Result<(), ModelError> {
+        let ratio = ratio.or_else(|| self.law.yarn_shear_ratio());
+        let rule = rule.resolve(ratio);
+        let beta = match ratio {
+            Some(r) if r > HOURGLASS_RATIO => HOURGLASS_RATIO / r,
+            _ => 1.0,
+        };
+        let same = match &self.centres {
+            Some(c) => rule == YarnRule::Centre && c.moved == 1.0 - beta,
+            None => rule == YarnRule::Full,
+        };
+        if same {
             return Ok(());
         }
         self.centres = match rule {
-            YarnRule::Centre => Some(self.build_centres()?),
+            YarnRule::Centre => Some(self.build_centres(beta)?),
             _ => None,
         };
         Ok(())
@@ -159,7 +200,7 @@ impl ShellModel {
         }
     }
 
-    fn build_centres(&self) -> Result<Centres, ModelError> {
+    fn build_centres(&self, beta: f64) -> Result<Centres, ModelError> {
         let one = LimitBasis::from_surface(self.basis.surface(), 1)
             .map_err(|e| ModelError::Centre(e.to_string()))?;
         let npf = self.basis.points_per_face;
@@ -191,10 +232,6 @@ impl ShellModel {
                 local_index[off + k] = at as u16;
             }
         }
-        let beta = match self.law.yarn_shear_ratio() {
-            Some(r) if r > HOURGLASS_RATIO => HOURGLASS_RATIO / r,
-            _ => 1.0,
-        };
         Ok(Centres {
             stencils: one.stencils,
             rest,

@@ -5,7 +5,7 @@
 //! by 1 %, no curve by 0.3 %) and which stages it would move (the others are not refitted).
 
 use super::map::StageMap;
-use super::mesh_check::{order, MeshCheck};
+use super::mesh_check::MeshCheck;
 use super::{FitError, Fitter, StageMode, StageSets};
 
 /// A stage whose determined quantities the last refinement moved by less than this is
@@ -34,13 +34,13 @@ pub(super) fn ladder(
         let from = meshes.last().copied().unwrap_or(level);
         // is this level worth it? the last measured refit change, carried one level finer
         if let (Some(m), true) = (&last_check, li >= 2) {
-            let estimate = m.next_level(order(opts.grading, f.yarns()));
+            let estimate = m.next_level(f.mesh_order());
             if estimate.passes() {
                 let note = format!(
                     "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
                     level.0, level.1, from.0, from.1, m.parameter,
                     100.0 * estimate.change, 100.0 * estimate.curve_change,
-                    100.0 * m.change, 100.0 * m.curve_change, order(opts.grading, f.yarns())
+                    100.0 * m.change, 100.0 * m.curve_change, f.mesh_order()
                 );
                 f.say(&note);
                 f.notes.push(note);

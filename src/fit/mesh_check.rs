@@ -44,12 +44,20 @@ pub enum MeshCheckMode {
 /// Convergence order the coarse check assumes for the strips' residuals: the slowest measured
 /// on the fit's strips, so that the estimate errs on the large side. Graded cages
 /// ([`crate::scene::STRIP_GRADING`]): 2 (the 45° strip converges at 2.1–2.6 on them, `cargo
-/// run --release --example graded_strip`); uniform cages: 1.2 (the 45° strip's clamped corners,
-/// `paper_repro/convergence/tensile_45.txt`: 1.2–1.3). Yarn terms on the face centres
-/// ([`crate::assembly::YarnRule::Centre`], nearly inextensible yarns): 0.8 (a stiff-yarn bias
-/// strip converges at 0.8–0.9 on graded cages, `paper_repro/convergence/stiff_bias`).
-pub fn order(grading: crate::mesh::Grading, yarns: crate::assembly::YarnRule) -> f64 {
-    if yarns == crate::assembly::YarnRule::Centre {
+/// run --release --example graded_strip`; with the yarn terms on the face centres at 2.0 from
+/// 16 × 24 to 64 × 96 at yarn-to-shear ratios of 50 and 200,
+/// `paper_repro/convergence/stiff_bias/yarn_rules.md`); uniform cages: 1.2 (the 45° strip's
+/// clamped corners, `paper_repro/convergence/tensile_45.txt`: 1.2–1.3). Nearly inextensible
+/// yarns on the face centres ([`crate::assembly::YarnRule::Centre`] at a yarn-to-shear
+/// `ratio` of [`STIFF_FROM_RATIO`] or more, or unknown): 0.8 (a ratio-1000 bias strip
+/// converges at 0.6–0.9 on graded cages, `paper_repro/convergence/stiff_bias`).
+pub fn order(
+    grading: crate::mesh::Grading,
+    yarns: crate::assembly::YarnRule,
+    ratio: Option<f64>,
+) -> f64 {
+    let stiff = ratio.is_none_or(|r| r >= STIFF_FROM_RATIO);
+    if yarns == crate::assembly::YarnRule::Centre && stiff {
         0.8
     } else if grading.across >= 0.5 && grading.along >= 0.5 {
         2.0
@@ -57,6 +65,10 @@ pub fn order(grading: crate::mesh::Grading, yarns: crate::assembly::YarnRule) ->
         1.2
     }
 }
+
+/// The yarn-to-shear ratio from which [`order`] takes the slow order of nearly inextensible
+/// yarns: measured at 2.0 up to 200, 0.6–0.9 at 1000.
+pub const STIFF_FROM_RATIO: f64 = 200.0;
 
 /// What a stage fitted, for the check.
 #[derive(Clone, Debug)]
@@ -224,6 +236,13 @@ impl MeshCheck {
 }
 
 impl Fitter<'_> {
+    /// The convergence order the fit's estimates of its strips' mesh errors assume
+    /// ([`order`] for its grading, yarn rule and the law's current yarn-to-shear ratio).
+    pub(super) fn mesh_order(&self) -> f64 {
+        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        order(self.opts.grading, self.yarns(), ratio)
+    }
+
     /// The tensile stages' latest linearisations at the law's final degrees, then the bend
     /// stage's, all on `level`.
     fn final_linearisations(&self, level: (usize, usize)) -> Vec<Linearised> {
@@ -316,10 +335,7 @@ impl Fitter<'_> {
         // the defect towards the solved mesh, and the factor that makes it the one to `finer`
         let (solved_on, factor) = match mode {
             MeshCheckMode::Fine => (finer, 1.0),
-            _ => (
-                coarse,
-                -(2f64.powf(-order(self.opts.grading, self.yarns()))),
-            ),
+            _ => (coarse, -(2f64.powf(-self.mesh_order()))),
         };
         self.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
@@ -462,7 +478,7 @@ impl Fitter<'_> {
                 "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
                 m.solved_on.0,
                 m.solved_on.1,
-                order(self.opts.grading, self.yarns()),
+                self.mesh_order(),
                 m.mesh.0,
                 m.mesh.1
             )

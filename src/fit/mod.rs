@@ -331,6 +331,8 @@ struct Fitter<'a> {
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
     /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
     yarns: Option<crate::assembly::YarnRule>,
+    /// the yarn-to-shear ratio that decided it and sets every strip's β (the bootstrap's)
+    yarn_ratio: Option<f64>,
     /// what the tension–shear coupling's trial decided ([`coupling`])
     coupling: coupling::CouplingOutcome,
     /// the rms relative error of the last tensile stage run (of the kept degree after a
@@ -579,6 +581,7 @@ pub fn fit(
         bend_cache: Default::default(),
         predictions: Default::default(),
         yarns: None,
+        yarn_ratio: None,
         coupling: coupling::CouplingOutcome::Off,
         stage_rms: f64::NAN,
         screened: None,

@@ -108,7 +108,7 @@ impl Fitter<'_> {
             .collect();
         let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
         let (fine, rough) = self.predict_pair(&jobs, last, half)?;
-        let order = super::mesh_check::order(self.opts.grading, self.yarns());
+        let order = self.mesh_order();
         let mut out = Vec::new();
         for (s, strip) in self.prep.strips.iter().enumerate() {
             let mut worst = StripCheck {

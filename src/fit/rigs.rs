@@ -45,16 +45,27 @@ impl Fitter<'_> {
         self.yarns.unwrap_or(YarnRule::Full)
     }
 
+    /// The rule of a strip cut at `angle`: the fit's, but `auto` keeps the full rule where
+    /// the yarns run along the cage ([`YarnRule::for_strip`]).
+    pub(super) fn strip_yarns(&self, angle: f64) -> YarnRule {
+        if self.opts.yarn_rule.for_strip(angle) == YarnRule::Full {
+            YarnRule::Full
+        } else {
+            self.yarns()
+        }
+    }
+
     /// Decides `--yarn-rule auto` by the bootstrapped law's yarn-to-shear ratio, so that
     /// every strip of the fit shares one discretisation, and says so.
     pub(super) fn decide_yarns(&mut self) {
         let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
         let rule = self.opts.yarn_rule.resolve(ratio);
         self.yarns = Some(rule);
+        self.yarn_ratio = ratio;
         if rule == YarnRule::Centre {
             let why = match self.opts.yarn_rule {
                 YarnRule::Auto => format!(
-                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, at least {:.0})",
+                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, above {:.0})",
                     ratio.unwrap_or(f64::NAN),
                     crate::assembly::CENTRE_FROM_RATIO
                 ),
@@ -62,7 +73,7 @@ impl Fitter<'_> {
             };
             self.notes.push(format!(
                 "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
-                super::mesh_check::order(self.opts.grading, rule)
+                super::mesh_check::order(self.opts.grading, rule, ratio)
             ));
         }
     }
@@ -84,7 +95,8 @@ impl Fitter<'_> {
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
         t.grading = self.opts.grading;
-        t.yarn_rule = self.yarns();
+        t.yarn_rule = self.strip_yarns(angle);
+        t.yarn_ratio = self.yarn_ratio;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
         t.solver.strategy = self.opts.strategy;

@@ -104,7 +104,8 @@ impl Fitter<'_> {
             let own = self.strip_level(s, level);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.opts.grading;
-            t.yarn_rule = self.yarns();
+            t.yarn_rule = self.strip_yarns(strip.angle_deg);
+            t.yarn_ratio = self.yarn_ratio;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
@@ -160,7 +161,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     // each strip's discretisation error: the last level against one with half the faces
     // each way, at the slowest order measured on the cage (the 45° strip's clamped corners:
     // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
-    let order = super::mesh_check::order(f.opts.grading, f.yarns());
+    let order = f.mesh_order();
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
     f.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",

@@ -372,7 +372,7 @@ impl CantileverBend {
             self.mesh,
             self.boundary,
             Grading::UNIFORM,
-            self.yarn_rule.for_bending(),
+            (self.yarn_rule.for_bending(), None),
         )?;
         let clamp = edge_clamp(
             &model,

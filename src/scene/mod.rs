@@ -95,7 +95,8 @@ fn positive(name: &str, v: f64) -> Result<f64, SceneError> {
 }
 
 /// The shell of a `width` × `length` sheet whose warp lies at `angle_deg`, on an `nx` × `ny`
-/// cage with the given boundary rule, grading and yarn rule.
+/// cage with the given boundary rule, grading and yarn rule (decided, and the centre rule's β
+/// set, by the yarn-to-shear ratio `yarns.1`, or by the law's where that is `None`).
 fn build_model(
     material: &FabricMaterial,
     (width, length): (f64, f64),
@@ -103,7 +104,7 @@ fn build_model(
     (nx, ny): (usize, usize),
     boundary: BoundaryRule,
     grading: Grading,
-    yarns: YarnRule,
+    yarns: (YarnRule, Option<f64>),
 ) -> Result<ShellModel, SceneError> {
     if !grading.is_valid() {
         return Err(SceneError::Input(format!(
@@ -138,7 +139,7 @@ fn build_model(
         material.areal_density,
     )?;
     model.set_bending(material.bending);
-    model.set_yarn_rule(yarns)?;
+    model.set_yarn_rule_at(yarns.0, yarns.1)?;
     Ok(model)
 }
 

@@ -76,7 +76,7 @@ impl SquarePlate {
             (n, n),
             rule,
             Grading::UNIFORM,
-            YarnRule::Full,
+            (YarnRule::Full, None),
         )?;
         model.set_gravity([0.0, 0.0, -g]);
         let x0 = model.basis.control_points.clone();

@@ -72,7 +72,7 @@ impl Sheet<ShellModel> {
             (n, n),
             BoundaryRule::Phantom,
             Grading::UNIFORM,
-            YarnRule::Auto.for_bending(),
+            (YarnRule::Auto.for_bending(), None),
         )?;
         let rest = model.basis.control_points.clone();
         Self::from_parts(model, side, n, rest)

@@ -31,6 +31,10 @@ pub struct TensileStrip {
     /// How the yarn terms are integrated ([`YarnRule::Auto`] by default: on the face centres
     /// for nearly inextensible yarns, whose bias strips lock on the full rule).
     pub yarn_rule: YarnRule,
+    /// The yarn-to-shear ratio that decides `Auto` and sets the centre rule's β (`None`: the
+    /// law's when the strip is set up). A fit pins it, so that every strip it builds, at any
+    /// stage, has one discretisation.
+    pub yarn_ratio: Option<f64>,
 }
 
 /// The measured choice of strip cage grading (`--grading 0.8,0.8`): control lines crowded
@@ -75,6 +79,7 @@ impl TensileStrip {
                 ..NewtonOptions::default()
             },
             yarn_rule: YarnRule::Auto,
+            yarn_ratio: None,
         }
     }
 
@@ -120,7 +125,7 @@ impl TensileStrip {
             self.mesh,
             self.boundary,
             self.grading,
-            self.yarn_rule,
+            (self.yarn_rule.for_strip(self.angle_deg), self.yarn_ratio),
         )?;
         let nn = model.num_nodes();
         let side = (self.width, self.length);

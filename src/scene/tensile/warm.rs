@@ -259,6 +259,10 @@ mod tests {
         let m = FabricMaterial::paper("t", 0.1, 2e-4, law(2e8));
         let mut t = TensileStrip::new(0.05, 0.075, 30.0);
         t.mesh = (4, 6);
+        // the full rule, which `auto` took at these ratios (50 and 150) until 2026-12-06: on
+        // the centre rule this coarse strip's fourth point settles on neighbouring
+        // equilibria 1.5e-4 apart from the two starts, which is not what this test is about
+        t.yarn_rule = crate::assembly::YarnRule::Full;
         let nodes = [1e-3, 2e-3, 3e-3, 4e-3, 5e-3];
         let its =
             |p: &[crate::scene::TensilePoint]| p.iter().map(|p| p.report.iterations).sum::<usize>();
@@ -337,5 +341,39 @@ mod tests {
         // a repeated earlier point adds nothing and blows nothing up
         let c = secant_weights(&k, &k1, &[&e1, &e1]);
         assert!(c.iter().all(|v| v.is_finite() && v.abs() < 10.0), "{c:?}");
+    }
+
+    /// A pinned yarn-to-shear ratio gives rigs set up for different laws one discretisation
+    /// (the centre rule's β); unpinned, each rig's β follows its own law.
+    #[test]
+    fn a_pinned_yarn_ratio_gives_every_rig_one_discretisation() {
+        let law = linear_law;
+        let m = FabricMaterial::paper("t", 0.1, 2e-4, law(2e8));
+        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
+        t.mesh = (4, 6);
+        t.yarn_ratio = crate::material::Law::yarn_shear_ratio(&law(2e8));
+        let nodes = [1e-3, 2e-3];
+        let mut rig = t.rig(&m, &nodes).unwrap();
+        rig.set_material(&law(6e8), 2e-4).unwrap();
+        let moved = rig.run(false).unwrap();
+        let mut stiffer = m.clone();
+        stiffer.law = law(6e8);
+        let pinned = t.rig(&stiffer, &nodes).unwrap().run(false).unwrap();
+        t.yarn_ratio = None;
+        let own = t.rig(&stiffer, &nodes).unwrap().run(false).unwrap();
+        for ((a, b), c) in moved.iter().zip(&pinned).zip(&own) {
+            assert!(
+                (a.force - b.force).abs() <= 1e-7 * b.force,
+                "{} vs {}",
+                a.force,
+                b.force
+            );
+            assert!(
+                (a.force - c.force).abs() > 1e-2 * c.force,
+                "{} vs {}",
+                a.force,
+                c.force
+            );
+        }
     }
 }
