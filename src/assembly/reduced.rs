@@ -26,9 +26,10 @@
 //! 10–13 iterations per step. β is fixed when the rule is set, by the law at that moment or
 //! by a ratio the caller pins ([`ShellModel::set_yarn_rule_at`]), so each model's energy stays
 //! one function of the positions and the parameters (and the sensitivities exact). A fit pins
-//! its bootstrapped law's ratio, so that all its strips share one discretisation: with β
-//! from each rig's own law, a 30° strip on 4 × 6 set up at a ratio of 50 and one set up at 150
-//! differed by 12 % in force at the same law.
+//! the ratio at the start of each ladder level, so that one level's strips, and the checks
+//! and reports on it, share one discretisation: with β from each rig's own law, a 30° strip
+//! on 4 × 6 set up at a ratio of 50 and one set up at 150 differed by 12 % in force at the
+//! same law.
 
 use super::{Accumulator, FaceScratch, ModelError, ShellModel, Want};
 use crate::material::OutOfDomain;

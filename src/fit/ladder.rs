@@ -47,6 +47,7 @@ pub(super) fn ladder(
                 break;
             }
         }
+        f.pin_yarns();
         if let Some(prev) = &previous {
             let now = f.fitted_forces(&all, level)?;
             let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();

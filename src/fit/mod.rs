@@ -331,7 +331,8 @@ struct Fitter<'a> {
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
     /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
     yarns: Option<crate::assembly::YarnRule>,
-    /// the yarn-to-shear ratio that decided it and sets every strip's β (the bootstrap's)
+    /// the yarn-to-shear ratio that sets the β of the strips set up from now on (the
+    /// bootstrap's, then each ladder level's law's: [`Fitter::pin_yarns`])
     yarn_ratio: Option<f64>,
     /// what the tension–shear coupling's trial decided ([`coupling`])
     coupling: coupling::CouplingOutcome,

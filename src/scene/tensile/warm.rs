@@ -203,6 +203,15 @@ mod tests {
     use crate::scene::tensile::TensileStrip;
 
     /// A linear orthotropic law with warp stiffness `a11`.
+    /// The linear law at a11 = 2e8 Pa (yarn-to-shear ratio 50) and a 50 × 75 mm strip cut at
+    /// 30° on a 4 × 6 cage.
+    fn strip_at_30() -> (FabricMaterial, TensileStrip) {
+        let m = FabricMaterial::paper("t", 0.1, 2e-4, linear_law(2e8));
+        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
+        t.mesh = (4, 6);
+        (m, t)
+    }
+
     fn linear_law(a11: f64) -> Orthotropic {
         Orthotropic {
             a11,
@@ -256,9 +265,7 @@ mod tests {
     #[test]
     fn a_stale_warm_start_gives_way_to_the_predictor() {
         let law = linear_law;
-        let m = FabricMaterial::paper("t", 0.1, 2e-4, law(2e8));
-        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
-        t.mesh = (4, 6);
+        let (m, mut t) = strip_at_30();
         // the full rule, which `auto` took at these ratios (50 and 150) until 2026-12-06: on
         // the centre rule this coarse strip's fourth point settles on neighbouring
         // equilibria 1.5e-4 apart from the two starts, which is not what this test is about
@@ -348,9 +355,7 @@ mod tests {
     #[test]
     fn a_pinned_yarn_ratio_gives_every_rig_one_discretisation() {
         let law = linear_law;
-        let m = FabricMaterial::paper("t", 0.1, 2e-4, law(2e8));
-        let mut t = TensileStrip::new(0.05, 0.075, 30.0);
-        t.mesh = (4, 6);
+        let (m, mut t) = strip_at_30();
         t.yarn_ratio = crate::material::Law::yarn_shear_ratio(&law(2e8));
         let nodes = [1e-3, 2e-3];
         let mut rig = t.rig(&m, &nodes).unwrap();
