@@ -331,8 +331,7 @@ struct Fitter<'a> {
     predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
     /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
     yarns: Option<crate::assembly::YarnRule>,
-    /// the yarn-to-shear ratio that sets the β of the strips set up from now on (the
-    /// bootstrap's, then each ladder level's law's: [`Fitter::pin_yarns`])
+    /// the yarn-to-shear ratio that sets new strips' β ([`Fitter::pin_yarns`])
     yarn_ratio: Option<f64>,
     /// what the tension–shear coupling's trial decided ([`coupling`])
     coupling: coupling::CouplingOutcome,
