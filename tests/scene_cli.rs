@@ -458,8 +458,9 @@ fn a_wrinkling_strip_on_a_fine_forced_mesh_gets_the_strips_budget() {
         "the old budget sufficed: {its} iterations ({err})"
     );
     // the three cages converge: the force moves the same way with each refinement, by less
-    // each time (measured: 30.34, 30.22, 30.18 N on the full rule, `auto` at this ratio,
-    // from above; 29.99, 30.10, 30.13 N from below with `--yarn-rule centre`)
+    // each time (measured: 29.99, 30.10, 30.13 N with the yarn terms on the face centres,
+    // `auto` at this ratio since 2026-12-06; 30.34, 30.22, 30.18 N on the full rule, which
+    // converges from above)
     let (coarse, _) = force("8x12");
     let (middle, _) = force("16x24");
     assert!(

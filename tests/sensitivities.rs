@@ -44,8 +44,8 @@ fn forces(
     strip.mesh = (4, 6);
     strip.grading = grading;
     strip.solver.rtol = 1e-13;
-    // one discretisation for every perturbed law, as the sensitivities assume: the yarn rule
-    // and the centre rule's β decided by the base law's yarn-to-shear ratio, not each law's
+    // one discretisation for every perturbed law, as the sensitivities assume: the centre
+    // rule's β (`auto` at this material's yarn-to-shear ratio) pinned at the base law's
     strip.yarn_ratio = kshell::material::Law::yarn_shear_ratio(&material().law);
     strip
         .run_with_sensitivities(m, elongations, sens)

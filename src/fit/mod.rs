@@ -3,7 +3,7 @@
 //! - [`preprocess`]: toe compensation, roles and repeats, the strips the model solves;
 //! - [`map`]: a stage's variables and the law (and the a12 rule);
 //! - `rigs`: the strips kept warm, their node forces and the interpolation to the points;
-//! - `stages`: the homogeneous bootstrap and degree choice, the shell stages;
+//! - `stages`, `degrees`: the homogeneous bootstrap, the shell stages; the shear degree;
 //! - `ladder`: the mesh levels, and which of them (and which stages) the fit needs;
 //! - `surrogate`: the homogeneous strip as the shell's cheap model, and the space-mapped
 //!   start of every shell stage;
@@ -44,6 +44,7 @@
 mod bending;
 pub mod bootstrap;
 pub mod coupling;
+mod degrees;
 pub mod html;
 mod joint;
 mod ladder;
@@ -80,8 +81,7 @@ use optim::Method;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
 pub use refine::TestMeshes;
-use std::collections::HashMap;
-use std::time::Instant;
+use std::{collections::HashMap, time::Instant};
 use tolerances::{FIT_RTOL, NEAR_ANGLE_DEG, POLISH_XTOL, TRIAL_RETRY_ITERATIONS};
 
 /// The fit could not be done.

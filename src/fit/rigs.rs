@@ -75,7 +75,7 @@ impl Fitter<'_> {
         if rule == YarnRule::Centre {
             let why = match self.opts.yarn_rule {
                 YarnRule::Auto => format!(
-                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, at least {:.0})",
+                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, above {:.0})",
                     ratio.unwrap_or(f64::NAN),
                     crate::assembly::CENTRE_FROM_RATIO
                 ),

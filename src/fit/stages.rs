@@ -7,7 +7,6 @@ use super::optim::{minimize, Evaluation, Method, OptimOptions};
 use super::rigs::curve_residuals;
 use super::surrogate::{homogeneous_fit, mapped_start};
 use super::{to_evaluation, FitError, Fitter, StrainRange, TRIAL_RETRY_ITERATIONS};
-use crate::material::Orthotropic;
 use crate::scene::SceneError;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -24,6 +23,9 @@ pub(super) enum StageMode {
     /// (`--degree`, where giving the raise up had left the shear at degree 1 under
     /// `--degree 2`)
     RaiseAlways,
+    /// every variable, a degree just raised, fitted by the shell's own iterations without
+    /// the space-mapped start (the second start of a raise, see [`super::degrees`])
+    RaiseDirect,
     /// the stiffness c alone, η's shape held (the joint sweep's yarn stages, see
     /// [`super::Joint`]); a known stiffness leaves nothing to fit
     Stiffness,
@@ -296,7 +298,8 @@ impl Fitter<'_> {
         // the coarser level's optimum, and there the mapped proposals of the bundled default
         // fits were all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
         // model"), each a shell evaluation thrown away
-        let rounds = if stiffness_only || (!first_level && gn_gain < opts.rel_decrease) {
+        let direct = mode == StageMode::RaiseDirect;
+        let rounds = if direct || stiffness_only || (!first_level && gn_gain < opts.rel_decrease) {
             0
         } else {
             8
@@ -476,113 +479,6 @@ impl Fitter<'_> {
         self.time_stage(map.dir.name(), t0);
         self.stage_rms = err;
         Ok(Some((shape, range)))
-    }
-
-    /// Degree choice on the shell model: degree 1 from the bootstrap, degree d + 1 from the
-    /// shell's degree-d fit with a new zero-weight term bending where the bootstrap put its last term;
-    /// kept only when it lowers the shape error by the degree gain (so the kept law is never
-    /// worse than degree d's).
-    pub(super) fn shell_degree_ladder(
-        &mut self,
-        map: StageMap,
-        strips: &[usize],
-        level: (usize, usize),
-        candidates: &[Vec<f64>],
-    ) -> Result<(f64, Option<StrainRange>), FitError> {
-        let base = self.law.clone();
-        let mut best: Option<(f64, Orthotropic, Option<StrainRange>, f64)> = None;
-        for (i, cand) in candidates.iter().enumerate() {
-            let degree = i + 1;
-            self.law = base.clone();
-            match &best {
-                Some((_, law, _, _)) => {
-                    let prev = map.encode(law);
-                    let beta = super::plausible::new_term_beta(map, &prev, cand);
-                    self.law = law.clone();
-                    // exactly degree d's law: a new term of zero weight (a 1 % term bending
-                    // where the bootstrap's last one does was tried: its start was far worse on
-                    // canvas, 44 % against 19 %, and cost 90 s before degree 1 was kept)
-                    let q = map.raise(&prev, beta);
-                    map.decode(&q, &mut self.law);
-                }
-                None => map.decode(cand, &mut self.law),
-            }
-            let mode = match (&best, self.opts.fixed_degree) {
-                (None, _) => StageMode::Full,
-                (Some(_), Some(_)) => StageMode::RaiseAlways,
-                (Some(_), None) => StageMode::Raise,
-            };
-            let run = self.shell_stage(map, strips, level, true, mode, None);
-            let (err, range) = match run {
-                Ok(Some(r)) => r,
-                Ok(None) => {
-                    self.log_degree(format!(
-                        "{}: degree {} kept: degree {degree}'s space-mapped start found no better law",
-                        map.dir.name(),
-                        degree - 1
-                    ));
-                    break;
-                }
-                Err(e) if best.is_some() => {
-                    self.log_degree(format!(
-                        "{}: degree {degree} failed on the shell ({e}); degree {} kept",
-                        map.dir.name(),
-                        degree - 1
-                    ));
-                    break;
-                }
-                Err(e) => return Err(e),
-            };
-            self.degree_log.push(format!(
-                "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
-                map.dir.name(),
-                100.0 * err,
-                level.0,
-                level.1
-            ));
-            if degree > 1 {
-                let why = if map.eta(&self.law).degree() < degree {
-                    Some("came out with a term too small to matter".to_string())
-                } else {
-                    self.implausible(map, range.as_ref())
-                };
-                if let Some(why) = why {
-                    self.log_degree(format!(
-                        "{}: degree {} kept: degree {degree} {why}",
-                        map.dir.name(),
-                        degree - 1
-                    ));
-                    break;
-                }
-            }
-            let better = match &best {
-                None => true,
-                Some(_) if self.opts.fixed_degree.is_some() => true,
-                Some(b) => err <= self.opts.degree_gain * b.0,
-            };
-            if !better {
-                self.log_degree(format!(
-                    "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
-                    map.dir.name(),
-                    degree - 1,
-                    100.0 * (1.0 - self.opts.degree_gain)
-                ));
-                break;
-            }
-            best = Some((err, self.law.clone(), range, self.stage_rms));
-            if self.opts.fixed_degree.is_none() && err <= self.opts.degree_good {
-                self.degree_log.push(format!(
-                    "{}: degree {degree} kept: error below {:.2} %",
-                    map.dir.name(),
-                    100.0 * self.opts.degree_good
-                ));
-                break;
-            }
-        }
-        let (err, law, range, rms) = best.expect("one candidate at least");
-        self.law = law;
-        self.stage_rms = rms;
-        Ok((err, range))
     }
 
     /// Forces of every fitted curve on a mesh level at the current material (for the

@@ -29,9 +29,9 @@ pub struct SceneArgs {
     pub grading: Option<kshell::mesh::Grading>,
     /// How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per
     /// face), centre (one point per face: a membrane that does not lock when the yarns are
-    /// nearly inextensible and cross the cage; also `center`), or auto (centre from a
-    /// yarn-to-shear ratio max(a11, a22)/G12 of 200 on strips that cross the yarns; a
-    /// cantilever's and a 0° or 90° strip's auto is full).
+    /// nearly inextensible and cross the cage; also `center`), or auto (centre above a
+    /// yarn-to-shear ratio max(a11, a22)/G12 of 20, below which the two are the same; a
+    /// cantilever's auto is always full).
     #[arg(long, default_value = "auto")]
     pub yarn_rule: kshell::assembly::YarnRule,
     /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape

@@ -266,9 +266,9 @@ mod tests {
     fn a_stale_warm_start_gives_way_to_the_predictor() {
         let law = linear_law;
         let (m, mut t) = strip_at_30();
-        // the full rule, which `auto` takes at these ratios (50 and 150): on the centre rule
-        // this coarse strip's fourth point settles on neighbouring equilibria 1.5e-4 apart
-        // from the two starts, which is not what this test is about
+        // the full rule, which `auto` took at these ratios (50 and 150) until 2026-12-06: on
+        // the centre rule this coarse strip's fourth point settles on neighbouring
+        // equilibria 1.5e-4 apart from the two starts, which is not what this test is about
         t.yarn_rule = crate::assembly::YarnRule::Full;
         let nodes = [1e-3, 2e-3, 3e-3, 4e-3, 5e-3];
         let its =
@@ -356,7 +356,6 @@ mod tests {
     fn a_pinned_yarn_ratio_gives_every_rig_one_discretisation() {
         let law = linear_law;
         let (m, mut t) = strip_at_30();
-        t.yarn_rule = crate::assembly::YarnRule::Centre;
         t.yarn_ratio = crate::material::Law::yarn_shear_ratio(&law(2e8));
         let nodes = [1e-3, 2e-3];
         let mut rig = t.rig(&m, &nodes).unwrap();
