@@ -107,6 +107,21 @@ fn a_coupled_fabric_gets_its_coupling_and_every_off_axis_strip_follows() {
             .any(|l| l.as_str().is_some_and(|l| l.contains(what)))
     };
     assert!(says(&auto, "tension–shear coupling κ1 = "), "{auto:?}");
+    // the mesh check counts what the off-axis strips determine, the homogeneous strip's
+    // stress at each fitted angle, and not κ or its factor exp(κ ê), which trade off against
+    // η₄'s exponent (listed, not counted)
+    let check = auto["fit"]["mesh_check"]
+        .as_table()
+        .expect("[fit.mesh_check]");
+    for a in ["22.5", "45", "67.5"] {
+        assert!(
+            check.contains_key(&format!("bias_stress_{a}deg_at_100pct")),
+            "{check:?}"
+        );
+    }
+    assert!(check.contains_key("bias_coupling_factor_warp"), "{check:?}");
+    let counted = auto["fit"]["mesh_change_parameter"].as_str().unwrap();
+    assert!(!counted.contains("coupling"), "{counted}");
     assert!(!says(&off, "tension–shear coupling"));
     let (with, without) = (worst(&auto), worst(&off));
     assert!(with < 0.01, "coupled: worst off-axis error {with}");

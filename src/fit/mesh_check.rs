@@ -96,12 +96,15 @@ pub(super) struct Linearised {
     pub values: Vec<f64>,
     pub dg: DMatrix<f64>,
     /// which of them `mesh_change` covers: not η's μ and α one by one, which trade off
-    /// against each other where only their sum is tested (the tangents cover them)
+    /// against each other where only their sum is tested (the tangents cover them), nor a
+    /// coupled shear's factors exp(κ ê), which trade off against η₄'s stiffening along the
+    /// strips' paths (the off-axis stresses of [`super::uncertainty::offaxis_rows`] cover them)
     pub counts: Vec<bool>,
 }
 
 impl Linearised {
-    /// A tensile stage's, at its optimum `p`.
+    /// A tensile stage's, at its optimum `p`; `offaxis`: a coupled shear stage's off-axis
+    /// stresses ([`super::uncertainty::offaxis_rows`]).
     #[allow(clippy::too_many_arguments)]
     pub fn tensile(
         map: &super::map::StageMap,
@@ -111,16 +114,26 @@ impl Linearised {
         level: (usize, usize),
         j: &DMatrix<f64>,
         lens: &[usize],
+        offaxis: Option<(Vec<String>, Vec<f64>, DMatrix<f64>)>,
     ) -> Self {
         let (mut names, mut values, dg) = super::uncertainty::physical_rows(map, p, law);
         let (rn, rv, rg) = super::uncertainty::response_rows(map, p, law);
         let mut counts: Vec<bool> = names.iter().map(|n| n.ends_with("_pa")).collect();
-        counts.extend(rn.iter().map(|_| true));
+        counts.extend(rn.iter().map(|n| !n.contains("_coupling_factor_")));
         names.extend(rn);
         values.extend(rv);
-        let mut all = DMatrix::zeros(dg.nrows() + rg.nrows(), dg.ncols());
-        all.rows_mut(0, dg.nrows()).copy_from(&dg);
-        all.rows_mut(dg.nrows(), rg.nrows()).copy_from(&rg);
+        let (on, ov, og) =
+            offaxis.unwrap_or_else(|| (Vec::new(), Vec::new(), DMatrix::zeros(0, 0)));
+        counts.extend(on.iter().map(|_| true));
+        names.extend(on);
+        values.extend(ov);
+        let rows = [dg.nrows(), rg.nrows(), og.nrows()];
+        let mut all = DMatrix::zeros(rows.iter().sum(), dg.ncols());
+        all.rows_mut(0, rows[0]).copy_from(&dg);
+        all.rows_mut(rows[0], rows[1]).copy_from(&rg);
+        if rows[2] > 0 {
+            all.rows_mut(rows[0] + rows[1], rows[2]).copy_from(&og);
+        }
         Self {
             probe: Probe::Tensile(strips.to_vec()),
             dir: Some(map.dir),
@@ -211,9 +224,16 @@ impl MeshCheck {
             .filter(|(n, _)| {
                 n == stiffness
                     || (n.starts_with(prefix)
-                        && (n.contains("_tangent_at_") || n.contains("_coupling_factor_")))
+                        && (n.contains("_tangent_at_") || n.contains("_stress_")))
             })
-            .map(|(_, c)| (c + tau).abs())
+            // the off-axis stresses are forces: the thickness's rescaling never entered them
+            .map(|(n, c)| {
+                if n.contains("_stress_") {
+                    c.abs()
+                } else {
+                    (c + tau).abs()
+                }
+            })
             .reduce(f64::max)
             .unwrap_or(f64::INFINITY)
     }
@@ -464,7 +484,7 @@ impl Fitter<'_> {
         let bad = !m.passes();
         let law = if m.law_change >= 0.01 {
             format!(
-                "; η's weights and exponents one by one by up to {:.0} % ({}), which the curves do not pin down",
+                "; η's weights and exponents (and a coupling's factors) one by one by up to {:.0} % ({}), which the curves do not pin down",
                 100.0 * m.law_change,
                 m.law_parameter
             )

@@ -14,6 +14,19 @@ fn toml_str(s: &str) -> String {
     crate::io::toml_string(s)
 }
 
+/// A TOML key: bare where it may be (letters, digits, `_`, `-`), quoted otherwise (an
+/// off-axis row's `22.5` would otherwise open a nested table).
+fn toml_key(k: &str) -> String {
+    let bare = !k.is_empty()
+        && k.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if bare {
+        k.to_string()
+    } else {
+        toml_str(k)
+    }
+}
+
 /// The material file followed by the `[fit]` table; loadable by every command that reads
 /// materials (the loader reads past `[fit]`).
 pub fn fit_toml(r: &FitResult, source: &str) -> String {
@@ -127,7 +140,7 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
             let _ = writeln!(
                 s,
                 "{} = {{ value = {:?}{se}, basis = {}, determined = {} }}",
-                e.name,
+                toml_key(&e.name),
                 e.value,
                 toml_str(e.basis),
                 e.determined
@@ -141,7 +154,7 @@ pub fn fit_toml(r: &FitResult, source: &str) -> String {
             m.mesh.0, m.mesh.1
         );
         for (name, c) in &m.changes {
-            let _ = writeln!(s, "{name} = {c:.6}");
+            let _ = writeln!(s, "{} = {c:.6}", toml_key(name));
         }
     }
     let _ = writeln!(s, "\n[fit.stage_seconds]");

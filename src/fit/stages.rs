@@ -410,8 +410,11 @@ impl Fitter<'_> {
         if let Some((r, j)) = super::uncertainty::at_optimum(&seen, &p) {
             let errors = super::uncertainty::stage_errors(&map, &p, j, r, &lens, &self.law);
             self.uncertainty.push((map.dir, p.clone(), errors));
+            let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
+                super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, &p, strips)
+            });
             self.linearised.push(super::mesh_check::Linearised::tensile(
-                &map, &p, &self.law, strips, level, j, &lens,
+                &map, &p, &self.law, strips, level, j, &lens, offaxis,
             ));
         }
         let angles: Vec<String> = strips

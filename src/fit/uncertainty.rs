@@ -98,7 +98,8 @@ pub(super) const RESPONSE_AT: [f64; 3] = [0.5, 0.75, 1.0];
 /// tangent stiffness c·η'(E²) of the stage's term at a few strains E across the tested range
 /// ([`RESPONSE_AT`] of √x̂), named `<dir>_tangent_at_<percent>`, and for a coupled shear the
 /// coupling's factor on the shear stiffness at the largest strain, `bias_coupling_factor_warp`
-/// and `_weft`; with values and ∂/∂p.
+/// and `_weft` (an upper bound of what the coupling does to the law, not what the strips
+/// determine: see [`offaxis_rows`]); with values and ∂/∂p.
 pub(super) fn response_rows(
     map: &StageMap,
     p: &[f64],
@@ -149,6 +150,73 @@ pub(super) fn response_rows(
         dg = dg.insert_rows(top, 2, 0.0);
         dg.rows_mut(top, 2).copy_from(&rows);
     }
+    (names, values, dg)
+}
+
+/// What a coupled shear stage's off-axis strips determine of the law where they test it: the
+/// homogeneous strip's force ([`super::bootstrap`]) at each fitted off-axis angle, at
+/// [`RESPONSE_AT`] of that angle's largest elongation, named
+/// `bias_stress_<angle>deg_at_<percent>pct`, with ∂/∂p by central differences (a few 3 × 3
+/// solves per row). The coupling's own factor exp(κ ê) of [`response_rows`] takes one yarn to
+/// the stage's largest strain ê, a state no strip reaches (a 45° strip of stiff yarns shears
+/// with its yarns nearly unstretched); along the strips' paths κ trades off against η₄'s
+/// stiffening, as μ against α, and these rows are what the strips pin down. Rows of an angle
+/// whose strip leaves the law's domain are NaN (the mesh check skips them).
+pub(super) fn offaxis_rows(
+    prep: &super::preprocess::Prepared,
+    base: &Orthotropic,
+    tau: f64,
+    map: &StageMap,
+    p: &[f64],
+    strips: &[usize],
+) -> (Vec<String>, Vec<f64>, DMatrix<f64>) {
+    use super::bootstrap::homogeneous_curve;
+    // each off-axis angle once: its first strip's geometry, the largest node of any of them
+    let mut angles: Vec<(f64, f64, f64, f64)> = Vec::new();
+    for s in strips.iter().map(|&s| &prep.strips[s]) {
+        let a = s.angle_deg.rem_euclid(180.0);
+        if a.abs() < 1e-9 || (a - 90.0).abs() < 1e-9 {
+            continue;
+        }
+        let top = s.nodes.last().copied().unwrap_or(0.0);
+        match angles.iter_mut().find(|x| (x.0 - s.angle_deg).abs() < 1e-9) {
+            Some(x) => x.3 = x.3.max(top),
+            None => angles.push((s.angle_deg, s.width, s.length, top)),
+        }
+    }
+    let forces = |q: &[f64]| -> Vec<f64> {
+        let mut law = base.clone();
+        map.decode(q, &mut law);
+        let mut out = Vec::new();
+        for &(angle, width, length, top) in &angles {
+            let elong: Vec<f64> = RESPONSE_AT.iter().map(|f| f * top).collect();
+            match homogeneous_curve(&law, angle, width, length, tau, &elong, false) {
+                Ok(pts) => out.extend(pts.iter().map(|h| h.force)),
+                Err(_) => out.extend(RESPONSE_AT.iter().map(|_| f64::NAN)),
+            }
+        }
+        out
+    };
+    let values = forces(p);
+    let mut dg = DMatrix::zeros(values.len(), p.len());
+    for i in 0..p.len() {
+        let h = 1e-6 * p[i].abs().max(1.0);
+        let (mut up, mut down) = (p.to_vec(), p.to_vec());
+        up[i] += h;
+        down[i] -= h;
+        let (fu, fd) = (forces(&up), forces(&down));
+        for k in 0..values.len() {
+            dg[(k, i)] = (fu[k] - fd[k]) / (2.0 * h);
+        }
+    }
+    let names = angles
+        .iter()
+        .flat_map(|a| {
+            RESPONSE_AT
+                .iter()
+                .map(move |f| format!("bias_stress_{}deg_at_{:.0}pct", a.0, 100.0 * f))
+        })
+        .collect();
     (names, values, dg)
 }
 
@@ -354,5 +422,115 @@ mod tests {
         assert!(covariance(&j, &[0.1, 0.2], &[1, 1]).is_none());
         let j = DMatrix::from_row_slice(3, 2, &[1.0, 2.0, 2.0, 4.0, 3.0, 6.0]);
         assert!(covariance(&j, &[0.1, 0.2, 0.3], &[3]).is_none());
+    }
+
+    /// The coupled fabric of `paper_repro/off_axis` (yarns 20–30× stiffer than the shear, the
+    /// shear times exp(−15 (E11 + E22))), with strips at 15°, 45° and 75° to 5 % elongation.
+    fn coupled_stage() -> (
+        super::super::preprocess::Prepared,
+        Orthotropic,
+        StageMap,
+        Vec<f64>,
+    ) {
+        use super::super::preprocess::{Prepared, Strip};
+        use crate::material::{Cutoffs, Eta, ShearCoupling};
+        let strip = |angle: f64| Strip {
+            angle_deg: angle,
+            width: 0.05,
+            length: 0.075,
+            curves: Vec::new(),
+            nodes: (1..=8).map(|k| 0.075 * 0.05 * k as f64 / 8.0).collect(),
+            at_points: true,
+            refine: 0,
+        };
+        let prep = Prepared {
+            curves: Vec::new(),
+            strips: vec![strip(15.0), strip(45.0), strip(75.0), strip(90.0)],
+            notes: Vec::new(),
+            misfit: Default::default(),
+        };
+        let law = Orthotropic {
+            a11: 3e7,
+            a22: 2e7,
+            a12: 1e7,
+            g12: 1e6,
+            warp: Eta::linear(),
+            weft: Eta::linear(),
+            shear: Eta::linear(),
+            cutoffs: Cutoffs::none(),
+            coupling: Some(ShearCoupling {
+                warp: -15.0,
+                weft: -15.0,
+            }),
+        };
+        let map = StageMap {
+            dir: Direction::Shear,
+            xhat: 0.025f64.powi(2),
+            c_known: false,
+            a12: super::super::map::A12Rule::HalfMin,
+            coupling: true,
+        };
+        let p = map.encode(&law);
+        (prep, law, map, p)
+    }
+
+    /// The off-axis rows are the homogeneous strip's forces where the strips test the law
+    /// (every off-axis angle once, the yarn-aligned strip left out), and their derivatives
+    /// agree with a wider central difference.
+    #[test]
+    fn off_axis_rows_are_the_strips_homogeneous_forces() {
+        let (prep, law, map, p) = coupled_stage();
+        let (names, values, dg) = offaxis_rows(&prep, &law, 3e-4, &map, &p, &[0, 1, 2, 3]);
+        assert_eq!(names.len(), 9);
+        assert_eq!(names[3], "bias_stress_45deg_at_50pct");
+        let top = 0.075 * 0.05;
+        let at = [0.5 * top, 0.75 * top, top];
+        let want =
+            super::super::bootstrap::homogeneous_curve(&law, 45.0, 0.05, 0.075, 3e-4, &at, false)
+                .unwrap();
+        for k in 0..3 {
+            assert!((values[3 + k] / want[k].force - 1.0).abs() < 1e-12);
+        }
+        for i in 0..p.len() {
+            let h = 1e-4 * p[i].abs().max(1.0);
+            let (mut up, mut down) = (p.clone(), p.clone());
+            up[i] += h;
+            down[i] -= h;
+            let (_, vu, _) = offaxis_rows(&prep, &law, 3e-4, &map, &up, &[0, 1, 2, 3]);
+            let (_, vd, _) = offaxis_rows(&prep, &law, 3e-4, &map, &down, &[0, 1, 2, 3]);
+            for k in 0..values.len() {
+                let fd = (vu[k] - vd[k]) / (2.0 * h);
+                let scale = dg.column(i).amax().max(1e-12 * values[k]);
+                assert!(
+                    (dg[(k, i)] - fd).abs() < 1e-5 * scale,
+                    "{k} {i}: {} {fd}",
+                    dg[(k, i)]
+                );
+            }
+        }
+    }
+
+    /// Why the coupling's factor exp(κ₁ ê) is no measure of what the strips determine: with
+    /// stiff yarns the strips' yarns stretch far less than ê, so every off-axis stress moves
+    /// with κ₁ by a fraction of what the factor does (measured: 2–5 % of it at 15° and 45°,
+    /// 13–25 % at 75°, nearest the warp).
+    #[test]
+    fn the_strips_see_a_fraction_of_the_coupling_factor() {
+        let (prep, law, map, p) = coupled_stage();
+        let (names, values, dg) = offaxis_rows(&prep, &law, 3e-4, &map, &p, &[0, 1, 2]);
+        let (rn, rv, rg) = response_rows(&map, &p, &law);
+        let f = rn
+            .iter()
+            .position(|n| n == "bias_coupling_factor_warp")
+            .unwrap();
+        let k1 = p.len() - 2;
+        let factor = (rg[(f, k1)] / rv[f]).abs();
+        for (k, name) in names.iter().enumerate() {
+            let stress = (dg[(k, k1)] / values[k]).abs();
+            assert!(
+                stress < factor / 3.0,
+                "{name}: {stress} against the factor's {factor}"
+            );
+        }
     }
 }
