@@ -62,8 +62,11 @@ impl TestMeshes {
 
 /// The most times one strip's mesh is doubled beyond the ladder's last level.
 pub(super) const MAX_DOUBLINGS: u32 = 3;
-/// A strip is not refined past this many faces (a 64 × 64 cage: a few seconds a solve).
-pub(super) const MAX_FACES: usize = 4096;
+/// A strip is not refined past this many faces: a 64 × 96 cage, the standard 50 × 75 mm strip
+/// doubled twice from the 16 × 24 level (2.7 s a point, against 0.4 s on 32 × 48: the skewed
+/// fabric of `paper_repro/off_axis` at 60°, 2 cores). It was 4096 (64 × 64) until 2026-12-07,
+/// which stopped that strip on 32 × 48 with its curve moving by 0.48–0.49 % in the mesh check.
+pub(super) const MAX_FACES: usize = 6144;
 /// The floor of a test's mesh tolerance (the 0.3 %).
 pub(super) const MESH_FLOOR: f64 = 3e-3;
 
