@@ -82,9 +82,9 @@ done
     echo
     echo "Predicted on graded 64x96 cages, finer than the data's and the fits' (\`ks-fit tensile"
     echo "--mesh 64x96 --grading 0.8,0.8\`, 5 % stretch in quarters): the largest relative difference"
-    echo "from the material that made the data, over the four points of each strip. Every off-axis"
-    echo "stress the coupled fits were checked on is what these curves measure, while κ itself"
-    echo "comes back 7–14 % off (see the README, tension–shear coupling)."
+    echo "from the material that made the data, over the four points of each strip: what the"
+    echo "coupled fits' mesh check counts (the off-axis stresses), whatever κ in the table above"
+    echo "(κ trades off against η₄'s exponent; see the README, tension–shear coupling)."
     echo
     echo "| fit | 15° | 45° | 75° |"
     echo "|---|---|---|---|"
