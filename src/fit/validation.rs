@@ -408,7 +408,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
     use super::coupling::CouplingOutcome;
     let coupling = match (&f.coupling, l.coupling) {
         (CouplingOutcome::Kept { without, with }, Some(c)) => Some(format!(
-            "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty])",
+            "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty]), together with η4's exponents, which it trades off against along the strips' paths: what the strips pin down is each off-axis strip's stress (bias_stress_* in [fit.mesh_check])",
             c.warp, c.weft
         )),
         (CouplingOutcome::Rejected { why, .. }, _) => Some(format!(
