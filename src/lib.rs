@@ -29,6 +29,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod quadrature;
+pub mod recommend;
 pub mod render;
 pub mod scene;
 pub mod shape;

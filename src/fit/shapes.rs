@@ -19,8 +19,8 @@
 //! solves; without a measured force G12 stays assumed and a warning says why.
 
 use super::{FitError, Fitter};
-use crate::shape::target::ShapeTarget;
-use crate::tri::fit::SHAPE_TRUST;
+use crate::fit::shape_target::ShapeTarget;
+use crate::fit::tri::SHAPE_TRUST;
 use std::time::Instant;
 
 /// The note a fit without an off-axis test carries (its start says why G12 was not fitted).

@@ -203,9 +203,19 @@ pub(crate) fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<
 /// solver's tolerances and double precision handle (1e-300 Pa gave negative forces).
 pub const MODULUS_RANGE: (f64, f64) = (1.0, 1e13);
 
+/// The model kind of a file that has a `[model]` table and no shell law, if it is one.
+pub fn model_only(text: &str) -> Option<String> {
+    let v: toml::Value = toml::from_str(text).ok()?;
+    let t = v.as_table()?;
+    if t.contains_key("a11_pa") {
+        return None;
+    }
+    Some(t.get("model")?.get("kind")?.as_str()?.to_string())
+}
+
 /// Parses and checks material TOML; `path` names it in errors.
 pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, MaterialFileError> {
-    if let Some(kind) = crate::tri::file::model_only(text) {
+    if let Some(kind) = model_only(text) {
         return Err(MaterialFileError {
             path: path.to_string(),
             line: line_of_key(text, Some("model"), "kind"),

@@ -19,11 +19,13 @@ pub mod roof;
 pub mod sheet;
 pub mod sphere;
 mod tensile;
+pub mod tri;
 
 pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMENT};
 pub use corner::{CornerPull, PullPoint};
 pub use drape::{Drape, DrapeShape};
 pub use frame::{Deformed, FramePoint, PictureFrame};
+pub use tri::{TriCantilever, TriTensile};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING, STRIP_ITERATIONS};
 
 use crate::assembly::{ModelError, ShellModel, YarnRule};

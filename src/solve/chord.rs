@@ -9,8 +9,7 @@
 use super::linearization::hessian_times;
 use super::newton::{balance, uniform};
 use super::{FreeSystem, NewtonOptions};
-use crate::assembly::Want;
-use crate::model::ClothModel;
+use crate::model::{ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;

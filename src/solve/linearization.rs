@@ -2,8 +2,7 @@
 //! sensitivity system of Clyde et al. 2017, Eq. 6).
 
 use super::{refine, FreeSystem, Precision, SolveError};
-use crate::assembly::{BlockMatrix, Want};
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;

@@ -5,8 +5,7 @@ use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL, STEP_FORCING,
 };
-use crate::assembly::{BlockMatrix, Want};
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;

@@ -4,7 +4,7 @@
 use crate::guard::Guard;
 use kshell::io::{cell, num};
 use kshell::material::load_material;
-use kshell::shape::target::{ShapeFit, ShapeTarget};
+use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
 
 /// Highest degree of an η the fit accepts (each degree adds two parameters per direction).

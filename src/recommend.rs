@@ -9,7 +9,8 @@ use crate::material::FabricMaterial;
 use crate::scene::{CantileverBend, CornerPull, Drape, PictureFrame, TensileStrip};
 use crate::solve::NewtonOptions;
 use crate::tri::file::SPRING_CURVATURE;
-use crate::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
+use crate::scene::{TriCantilever, TriTensile};
+use crate::tri::{TriKind, TriMaterial};
 use std::time::Instant;
 
 /// Faces (across, along) of one mesh.

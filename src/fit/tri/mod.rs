@@ -18,12 +18,12 @@
 //! [`TriMaterial::from_zero_strain`] does. What the data cannot determine is kept at that start
 //! and named in [`TriFit::undetermined`].
 
-use super::curve::Stiffness;
-use super::params::{TriKind, TriMaterial, ZeroStrain};
-use super::scenes::{TriCantilever, TriTensile};
+use crate::tri::curve::Stiffness;
+use crate::tri::params::{TriKind, TriMaterial, ZeroStrain};
+use crate::scene::{TriCantilever, TriTensile};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::{FabricDataset, Role};
-use crate::shape::target::{ShapeFit, ShapeTarget};
+use crate::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::time::Instant;
 
 mod minimise;
@@ -219,7 +219,7 @@ pub fn fit_tri(
         &start.moduli,
         density,
         cell,
-        super::file::SPRING_CURVATURE,
+        crate::tri::file::SPRING_CURVATURE,
     );
     material.coupling = 0.0;
     let mut undetermined = start.undetermined.clone();
