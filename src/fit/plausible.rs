@@ -1,5 +1,4 @@
-//! Laws the data determine and that behave: the checks every fitted η passes (issue "a
-//! material you can trust", item 2).
+//! Laws the data determine and that behave: the checks every fitted η passes.
 //!
 //! - **Bounded exponents**: |α x̂| ≤ [`BETA_MAX`](super::map::BETA_MAX), built into the stage
 //!   variables ([`super::map`]).

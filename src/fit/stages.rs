@@ -164,8 +164,8 @@ impl Fitter<'_> {
     /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
     /// whose mapped steps find no better law is given up (`None`): a bet that the shell's own
     /// iterations from a zero-weight term would not buy the degree gain either (on noise-free
-    /// cotton they gained nothing in one iteration and 10 s; on the bundled fabrics, before the
-    /// mapped start, degree 2 gained −3 to 23 % of shape error, never the 30 % needed). A finer
+    /// cotton they gain nothing in one iteration and 10 s; on the bundled fabrics, without the
+    /// mapped start, degree 2 gains −3 to 23 % of shape error, never the 30 % needed). A finer
     /// level's stage takes the mapped steps only where its own Gauss–Newton step promises them
     /// work (below).
     pub(super) fn shell_stage(
