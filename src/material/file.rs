@@ -39,7 +39,7 @@
 //! ```
 //!
 //! An optional `[bending]` table gives the bending its own rigidities (see [`super::bending`])
-//! instead of the paper's τ³/12 link to the membrane law:
+//! in place of the paper's τ³/12 link to the membrane law:
 //!
 //! ```toml
 //! [bending]         # flexural rigidity per unit width, N·m (ASTM D1388's G = ρ g c³)
