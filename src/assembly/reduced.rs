@@ -18,8 +18,8 @@
 //! by the shear term and the bending (the stiffness matrix stays definite at rest).
 //!
 //! Held by the shear alone, those modes turn the tangent indefinite under load: a 67.5° strip
-//! at a yarn-to-shear ratio of 1000 on 64 × 96 took 15–25 Newton iterations per step with
-//! indefinite backward-Euler steps, then stalled for minutes in the third (the full rule: 10).
+//! at a yarn-to-shear ratio of 1000 on 64 × 96 takes 15–25 Newton iterations per step with
+//! indefinite backward-Euler steps, then stalls for minutes in the third (the full rule: 10).
 //! So a fraction β = min(1, [`HOURGLASS_RATIO`]/ratio) of the yarn part stays on the Gauss
 //! points (the centres carry 1 − β): the freed modes see a yarn stiffness of 20 shears, as
 //! the full rule would at a ratio of 20, where it does not lock. With it that strip takes
@@ -96,7 +96,7 @@ impl YarnRule {
     /// The rule a tensile strip cut at `angle_deg` from the weft takes: `Auto` means the full
     /// rule where the yarns run along the cage (0° and 90°, nothing to lock; the full rule's
     /// error there is the smaller, 1e-5 against 9e-5 on 16 × 24, and the centre rule's
-    /// 90° force at a ratio of 50 did not converge monotonically from 8 × 12 to 32 × 48, by
+    /// 90° force at a ratio of 50 does not converge monotonically from 8 × 12 to 32 × 48, by
     /// 1e-4 of itself), and is decided by the ratio elsewhere.
     pub fn for_strip(self, angle_deg: f64) -> YarnRule {
         let aligned = (angle_deg / 90.0 - (angle_deg / 90.0).round()).abs() < 1e-9;

@@ -9,9 +9,9 @@
 //!   module doc of `fit`): it lowers the shear stage's shape error by 30 %, or its rms
 //!   relative error by 30 % without raising the shape error. The rms alone would not do: a
 //!   coupling can absorb part of the repeats' scatter in scale (on the bundled cotton it
-//!   lowered the rms from 14.5 to 12.2 % while the shape error rose from 1.9 to 2.7 %); the
+//!   lowers the rms from 14.5 to 12.2 % while the shape error rises from 1.9 to 2.7 %); the
 //!   shape error alone misses a coupling that mostly rescales the off-axis curves (on strips
-//!   made with κ = −15 (32 × 48 data, first level) it fell by 36 %, the rms by 69 %);
+//!   made with κ = −15 (32 × 48 data, first level) it falls by 36 %, the rms by 69 %);
 //! - the law's tangent stays positive definite along the strains the strips exercise: the
 //!   homogeneous strip's strain path at each strip's angle, to twice its largest elongation
 //!   (the strip's interior; the clamped corners' singular strains are not a material state

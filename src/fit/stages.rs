@@ -20,7 +20,7 @@ pub(super) enum StageMode {
     /// better law
     Raise,
     /// every variable, a degree just raised, fitted whatever its space-mapped start finds
-    /// (`--degree`, where giving the raise up had left the shear at degree 1 under
+    /// (`--degree`: giving the raise up could leave the shear at degree 1 under
     /// `--degree 2`)
     RaiseAlways,
     /// every variable, a degree just raised, fitted by the shell's own iterations without
@@ -296,7 +296,7 @@ impl Fitter<'_> {
         // nor does a finer level's stage whose own Gauss–Newton step, from the Jacobian just
         // solved, is predicted to gain less than the stage asks of an iteration: it starts at
         // the coarser level's optimum, and there the mapped proposals of the bundled default
-        // fits were all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
+        // fits are all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
         // model"), each a shell evaluation thrown away
         let direct = mode == StageMode::RaiseDirect;
         let rounds = if direct || stiffness_only || (!first_level && gn_gain < opts.rel_decrease) {

@@ -4,9 +4,9 @@
 /// Relative residual at which the fit's equilibrium solves stop.
 pub(super) const FIT_RTOL: f64 = 1e-8;
 
-/// Newton iterations a trial point's cold solve may take after its warm start failed (cold
+/// Newton iterations a trial point's cold solve may take after its warm start fails (cold
 /// solves of the bundled fabrics take 3–10 iterations, 20–60 where the strip wrinkles; trial
-/// points far from the fit took up to 500 and still failed).
+/// points far from the fit can take 500 and still fail).
 pub(super) const TRIAL_RETRY_ITERATIONS: usize = 100;
 
 /// A finer level's polish stops, without trying it, when its next step would move every

@@ -200,7 +200,7 @@ pub(crate) fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<
 }
 
 /// Moduli a material file may give, Pa: far below and above any fabric, but within what the
-/// solver's tolerances and double precision handle (1e-300 Pa gave negative forces).
+/// solver's tolerances and double precision handle (1e-300 Pa gives negative forces).
 pub const MODULUS_RANGE: (f64, f64) = (1.0, 1e13);
 
 /// Parses and checks material TOML; `path` names it in errors.

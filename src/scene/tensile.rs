@@ -483,8 +483,8 @@ impl StripRig {
 
     /// A point that failed, with the Newton iterations of all its attempts (warm start, cheap
     /// attempts, sub-steps, the whole budget) in place of the last attempt's alone, which
-    /// understated the work: a strip that had spent its 60 said "did not converge in 20".
-    /// The attempts stay counted in `spent`, for the next point solved (a fitter's counts).
+    /// would understate the work (a strip that has spent its 60 would say "did not converge in
+    /// 20"). The attempts stay counted in `spent`, for the next point solved (a fitter's counts).
     fn point_failure(&self, e: SceneError) -> SceneError {
         let total = self.spent;
         match e {

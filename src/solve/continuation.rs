@@ -28,7 +28,7 @@ pub struct ContinuationReport {
 pub const RAMP_FULL_STEPS: usize = 5;
 
 /// Target of [`Strategy::Adaptive`]: the corrector's move as a fraction of the load increment's.
-/// On the heavy D1388 cantilever (4×16, 4×32) 0.1 took 139 and 109 iterations, 0.3 111 and 88,
+/// On the heavy D1388 cantilever (4×16, 4×32) 0.1 takes 139 and 109 iterations, 0.3 111 and 88,
 /// 1 100 and 75 but with 25-iteration corrector solves near the budget; 0.3 keeps them short.
 pub const ADAPTIVE_TOL: f64 = 0.3;
 

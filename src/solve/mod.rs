@@ -108,8 +108,8 @@ pub enum Strategy {
     /// iterations, kept only if it converges to a stable equilibrium), then the ramp from the
     /// start if it did not, each load step's first `continuation::RAMP_FULL_STEPS` Newton steps
     /// taken whole. The default: of ten cantilevers of the example material (20–400 mm, 0° and
-    /// 45°) it solves nine and the ramp seven; on those seven it took 952 Newton iterations
-    /// where the ramp took 1666 (heavy D1388 cantilever at 4×16: 15 against 108), drape angles
+    /// 45°) it solves nine and the ramp seven; on those seven it takes 952 Newton iterations
+    /// where the ramp takes 1666 (heavy D1388 cantilever at 4×16: 15 against 108), drape angles
     /// equal to 1e-9.
     #[default]
     FullStep,

@@ -155,7 +155,7 @@ pub(super) fn line_search(
             (&external, external_scale),
             &mut report,
         )?;
-        // the floor estimate can miss: an off-axis strip at 0.03 % strain stalled at 8.6e-9
+        // the floor estimate can miss: an off-axis strip at 0.03 % strain stalls at 8.6e-9
         // (its strains are differences of O(1) metrics, good to ε/strain). A Newton step that
         // does not halve a residual already under STALL_RTOL, or one the line search cannot
         // use there, means Newton is at the floor: forces good to 1e-6 are far inside any
