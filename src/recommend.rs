@@ -368,7 +368,7 @@ pub fn compare_on(
 
 /// The reference value of the shell's `levels` (coarse to fine) and how it was found:
 /// Richardson's extrapolation where the ladder converges monotonically, else the finest level
-/// (with how far the level before it lies). The drape's levels fold differently and are not
+/// (with how far the next coarser level lies). The drape's levels fold differently and are not
 /// each twice as fine: its reference is always the finest.
 fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
     let n = levels.len();

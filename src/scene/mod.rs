@@ -5,7 +5,7 @@
 //! the 1 m drape (`drape.rs`), the picture frame (`frame.rs`) and the corner pull
 //! (`corner.rs`), with the deformed surface's export (`export.rs`).
 //!
-//! Angles are measured from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
+//! Angles are taken from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
 //! axis is y; its weft direction is (sin θ, cos θ, 0) and its warp (cos θ, −sin θ, 0).
 
 mod cantilever;

@@ -167,7 +167,7 @@ pub fn cmd_fit(
             dir.display()
         ));
     }
-    // the degree choice was shown as progress; print it here only when progress was off
+    // the degree choice is shown as progress; print it here only when progress is off
     let shown = if quiet { &result.degree_log[..] } else { &[] };
     for line in shown.iter().chain(&result.notes) {
         println!("{line}");

@@ -50,7 +50,7 @@ pub struct RecommendArgs {
     #[arg(long)]
     overhang: Option<f64>,
     /// Material files with a fitted triangle model's [model] table (from `ks-fit fit --model`),
-    /// used for their models instead of converting the shell's moduli.
+    /// used for their models rather than converting the shell's moduli.
     #[arg(long, num_args = 1..)]
     fits: Vec<PathBuf>,
     /// Runs per model and mesh (the median time is kept; default 3, and 1 for the drape,

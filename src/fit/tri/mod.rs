@@ -307,8 +307,8 @@ pub fn fit_tri(
     // springs also carry stretch, so for them the stretch stages are repeated too, until no
     // value moves by 0.1 % (at most three more passes). A pass that leaves the fitted lab
     // tests worse off as a whole is undone: each stage only sees its own tests, and on a
-    // shell's cotton the springs' bending stage stiffened the ring-2 springs until the strips
-    // were 330–630 % off and a cantilever no longer solved.
+    // shell's cotton the springs' bending stage can stiffen the ring-2 springs until the
+    // strips are 330–630 % off and a cantilever no longer solves.
     let lab: Vec<usize> = select(&|t: &Target| match t {
         Target::Strip { fitted, .. } => *fitted,
         Target::Bend { .. } => true,
