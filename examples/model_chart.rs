@@ -15,7 +15,7 @@
 //! (`paper_repro/models/fitted/run.sh` makes the data, the fits and the chart).
 
 use kshell::material::load_material;
-use kshell::model::compare::{compare, LabTest, Run};
+use kshell::recommend::{compare, LabTest, Run};
 use kshell::tri::file::{model_only, parse_tri, TriSource};
 use kshell::tri::TriMaterial;
 use std::fmt::Write;

@@ -65,7 +65,7 @@ pub fn parse_ladder(s: &str) -> Result<Vec<(usize, usize)>, String> {
 }
 
 /// Checks a ladder before any level runs: each mesh within the face limit
-/// ([`crate::limits`]) and finer than the one before; with `doubling`, exactly twice as fine in
+/// ([`crate::limits`]) and finer than the previous one; with `doubling`, exactly twice as fine in
 /// both directions, as the Richardson estimate and the observed order assume.
 pub fn check_ladder(ladder: &[(usize, usize)], doubling: bool) -> Result<(), String> {
     for (k, &(nx, ny)) in ladder.iter().enumerate() {
@@ -119,7 +119,7 @@ pub fn study<E>(
     Ok(analyse(levels))
 }
 
-/// Differences, orders and the Richardson estimate of measured levels.
+/// Differences, orders and the Richardson estimate of solved levels.
 pub fn analyse(mut levels: Vec<Level>) -> Study {
     let n = levels.len();
     for i in 0..n.saturating_sub(1) {

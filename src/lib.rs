@@ -16,7 +16,7 @@
 //! | [`limits`] | resource limits checked before allocating (faces of a mesh) |
 //!
 //! Later stages (shell kinematics, material, assembly, solve, scene, fit, report) hand data on as
-//! plain structs of arrays; see `DESIGN.md` in the repository for the map.
+//! plain structs of arrays; see `docs/design.md` in the repository for the map.
 
 pub mod assembly;
 pub mod atlas;
@@ -29,6 +29,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod quadrature;
+pub mod recommend;
 pub mod render;
 pub mod scene;
 pub mod shape;

@@ -14,13 +14,13 @@
 //! The Hessian lives in a [`BlockMatrix`]: 3 × 3 blocks on the node pairs (i ≤ j) that share a
 //! Gauss point, a pattern built once per mesh.
 
-mod blocks;
+mod cloth_model;
 mod loads;
 mod projection;
 mod reduced;
 mod section;
 mod sensitivities;
-pub use blocks::{BlockMatrix, BlockPattern};
+pub use crate::model::{BlockMatrix, BlockPattern, Want};
 pub use reduced::{YarnRule, CENTRE_FROM_RATIO};
 pub use sensitivities::BENDING_PARAMS;
 
@@ -34,28 +34,6 @@ use nalgebra::{Matrix3, Vector3};
 use reduced::{Centres, Part};
 use section::Section;
 use std::sync::Arc;
-
-/// What to assemble.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Want {
-    Energy,
-    Gradient,
-    Hessian,
-    /// A convexified Hessian: at every Gauss point the section tangent is projected onto its
-    /// positive semidefinite part, the membrane stress weighting the strains' own Hessian is
-    /// replaced by its tensile part, and the bending moments' term is dropped, so that the
-    /// assembled matrix is positive semidefinite (a modified-Newton model; see
-    /// `solve::newton`).
-    ProjectedHessian,
-}
-
-impl Want {
-    /// Whether a Hessian (exact or projected) is wanted.
-    #[inline(always)]
-    pub fn hessian(self) -> bool {
-        matches!(self, Want::Hessian | Want::ProjectedHessian)
-    }
-}
 
 /// A shell discretised on a limit basis, with its rest state, law, thickness and loads.
 pub struct ShellModel {

@@ -7,7 +7,7 @@
 //! point rather than per element).
 
 /// The positive semidefinite part of a symmetric 6 × 6 matrix (negative eigenvalues set to 0).
-/// A Cholesky attempt (about 60 flops) settles the usual, definite case before an eigensolve.
+/// A Cholesky attempt (about 60 flops) settles the usual, definite case without an eigensolve.
 pub(super) fn psd_part(c: &nalgebra::SMatrix<f64, 6, 6>) -> nalgebra::SMatrix<f64, 6, 6> {
     if nalgebra::Cholesky::new(*c).is_some() {
         return *c;

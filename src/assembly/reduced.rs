@@ -18,8 +18,8 @@
 //! by the shear term and the bending (the stiffness matrix stays definite at rest).
 //!
 //! Held by the shear alone, those modes turn the tangent indefinite under load: a 67.5° strip
-//! at a yarn-to-shear ratio of 1000 on 64 × 96 took 15–25 Newton iterations per step with
-//! indefinite backward-Euler steps, then stalled for minutes in the third (the full rule: 10).
+//! at a yarn-to-shear ratio of 1000 on 64 × 96 takes 15–25 Newton iterations per step with
+//! indefinite backward-Euler steps, then stalls for minutes in the third (the full rule: 10).
 //! So a fraction β = min(1, [`HOURGLASS_RATIO`]/ratio) of the yarn part stays on the Gauss
 //! points (the centres carry 1 − β): the freed modes see a yarn stiffness of 20 shears, as
 //! the full rule would at a ratio of 20, where it does not lock. With it that strip takes
@@ -52,20 +52,20 @@ pub enum YarnRule {
 
 /// The yarn-to-shear stiffness ratio max(a₁₁, a₂₂)/G₁₂ above which [`YarnRule::Auto`] puts
 /// the yarn terms on the face centres: [`HOURGLASS_RATIO`], below which the centre rule keeps
-/// the whole yarn part on the Gauss points (β = 1) and is the full rule. Measured on a 50 ×
-/// 75 mm strip at 45° pulled 5 %, graded cages (`paper_repro/convergence/stiff_bias/
-/// yarn_rules.md`), the force's estimated error on 16 × 24 / 64 × 96: at a ratio of 50 the
-/// full rule 1.0 % / 0.086 %, the centre rule 0.54 % / 0.033 %; at 200 the full rule 3.6 % /
-/// 0.27 % against 1.1 % / 0.071 %; at 1000 12 % / 0.98 % against 2.4 % / 1.0 % (neither
-/// extrapolation settled there); 30°, 45° and 60° strips of the coupled materials of
-/// `paper_repro/off_axis/yarn_rules.md` on 32 × 48: at a ratio of 30 the centre rule 0.21–0.25 %
-/// against 0.28–0.37 %, at 100 0.01–0.10 % against 0.03–0.52 %. At 0° and 90° the full rule is the
-/// more accurate (1e-5 against 9e-5 on 16 × 24), but a fit's error is its off-axis strips'.
-/// (200 until 2026-12-06. A first try of 20 kept a degree-1 shear for the noise-free cotton
-/// of `paper_repro/mesh_independence` (G12 −6.1 %): on 8 × 12 the raised degree's mapped
-/// start led into a degenerate basin, although the law that made the data scores a lower
-/// shape error there on the centre rule than on the full one, 0.39 % against 0.65 %; the
-/// raise's second start, `fit::degrees`, finds it.)
+/// the whole yarn part on the Gauss points (β = 1) and is the full rule. On a 50 × 75 mm strip
+/// at 45° pulled 5 %, graded cages (`paper_repro/convergence/stiff_bias/yarn_rules.md`), the
+/// force's estimated error on 16 × 24 / 64 × 96: at a ratio of 50 the full rule 1.0 % /
+/// 0.086 %, the centre rule 0.54 % / 0.033 %; at 200 the full rule 3.6 % / 0.27 % against
+/// 1.1 % / 0.071 %; at 1000 12 % / 0.98 % against 2.4 % / 1.0 % (neither extrapolation settles
+/// there); 30°, 45° and 60° strips of the coupled materials of
+/// `paper_repro/off_axis/yarn_rules.md` on 32 × 48: at a ratio of 30 the centre rule
+/// 0.21–0.25 % against 0.28–0.37 %, at 100 0.01–0.10 % against 0.03–0.52 %. At 0° and 90° the
+/// full rule is the more accurate (1e-5 against 9e-5 on 16 × 24), but a fit's error is its
+/// off-axis strips'. (From 20 the noise-free cotton of `paper_repro/mesh_independence` is on
+/// the centre rule, where on 8 × 12 the raised degree's mapped start leads into a degenerate
+/// basin, although the law that made the data scores a lower shape error there on the centre
+/// rule than on the full one, 0.39 % against 0.65 %; the raise's second start,
+/// `fit::degrees`, finds it.)
 pub const CENTRE_FROM_RATIO: f64 = HOURGLASS_RATIO;
 
 impl YarnRule {
@@ -83,8 +83,8 @@ impl YarnRule {
     /// The rule a bending-dominated scene (cantilever, drape) takes: `Auto` means the full
     /// rule there. Locking is a membrane-shear effect of tension tests; in a bend the yarn
     /// strains are small, and one point per face leaves hourglass modes held only by the
-    /// (soft) shear term and β, on which the Newton solve of a 4 × 32 cantilever at a ratio
-    /// of 300 stalled before β existed (a relative residual of 1.0 in the first load step,
+    /// (soft) shear term and β; without β the Newton solve of a 4 × 32 cantilever at a ratio
+    /// of 300 stalls (a relative residual of 1.0 in the first load step,
     /// `tests/cantilever.rs`).
     pub fn for_bending(self) -> YarnRule {
         match self {
@@ -96,7 +96,7 @@ impl YarnRule {
     /// The rule a tensile strip cut at `angle_deg` from the weft takes: `Auto` means the full
     /// rule where the yarns run along the cage (0° and 90°, nothing to lock; the full rule's
     /// error there is the smaller, 1e-5 against 9e-5 on 16 × 24, and the centre rule's
-    /// 90° force at a ratio of 50 did not converge monotonically from 8 × 12 to 32 × 48, by
+    /// 90° force at a ratio of 50 does not converge monotonically from 8 × 12 to 32 × 48, by
     /// 1e-4 of itself), and is decided by the ratio elsewhere.
     pub fn for_strip(self, angle_deg: f64) -> YarnRule {
         let aligned = (angle_deg / 90.0 - (angle_deg / 90.0).round()).abs() < 1e-9;

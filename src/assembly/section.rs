@@ -6,7 +6,7 @@
 //!   by a three-point Gauss–Legendre rule (exact for St. Venant–Kirchhoff, whose integrand is
 //!   quadratic in ξ).
 //! - Bending of its own ([`crate::material::bending`]): W = τ ψ(Ẽ_m) + ½ Ẽ_bᵀ D Ẽ_b with D the
-//!   rigidities' diagonal tangent; one law evaluation per point instead of three.
+//!   rigidities' diagonal tangent; one law evaluation per point, against the paper's three.
 //! - Under [`super::YarnRule::Centre`] a Gauss point carries the section less τ ψ_y(Ẽ_m) and
 //!   a face centre τ ψ_y(Ẽ_m) alone (see [`super::reduced`]).
 

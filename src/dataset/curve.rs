@@ -1,12 +1,12 @@
 //! Reading one force–elongation curve as labs export it.
 //!
 //! The plain format is `elongation_mm,force_n` and one row per point. Testing machines add
-//! metadata lines before the header, quote their headers and put the units there
+//! metadata lines above the header, quote their headers and put the units there
 //! (`"Extension (mm)","Load (N)"`), and in many locales separate fields with semicolons and
 //! write decimal commas. The reader (the `csv` crate, for quoting) accepts all of these:
 //! - the separator is `;` when the file has one (then `,` is a decimal comma), else a tab when
 //!   it has one, else `,`;
-//! - lines before the header are metadata and skipped; the header is the first row naming an
+//! - lines above the header are metadata and skipped; the header is the first row naming an
 //!   elongation column (elongation, extension, displacement, deformation, stroke) and a force
 //!   column (force, load), or the two names given by the dataset's `columns` key; other columns
 //!   (time, strain…) are ignored;
@@ -24,7 +24,7 @@ pub(super) struct Curve {
     pub elongation_mm: Vec<f64>,
     pub force_n: Vec<f64>,
     pub lines: Vec<usize>,
-    /// rows folded into the row before them because their elongation repeated it
+    /// rows folded into the preceding row because their elongation repeats it
     pub duplicates: usize,
     /// the header's units, when not the plain format's (for the notes)
     pub units: Option<String>,
@@ -200,12 +200,12 @@ pub(super) fn parse_curve(
                     continue;
                 }
                 // a metadata line naming the columns without units ("Load cell: 1 kN"):
-                // an error only if no better header follows before the data
+                // an error only if no better header follows ahead of the data
                 Err(m) if !is_data => {
                     pending.get_or_insert((line, m));
                     continue;
                 }
-                Ok(None) if !is_data => continue, // metadata before the header
+                Ok(None) if !is_data => continue, // metadata above the header
                 _ => {}
             }
             if let Some((l, m)) = pending.take() {

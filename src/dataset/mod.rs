@@ -179,7 +179,7 @@ pub struct TensileTest {
     pub force_scale: f64,
     /// `columns` as written: the elongation and force columns' header names
     pub columns: Option<[String; 2]>,
-    /// the forces look like kN (tiny for the strip's width) and no `force_scale` was given
+    /// the forces look like kN (tiny for the strip's width) and no `force_scale` is given
     pub suspect_kn: bool,
 }
 
@@ -282,7 +282,7 @@ impl TensileTest {
 }
 
 /// 1-based line of byte offset `at`, moved past any whitespace (a table's span may start on
-/// the blank line before its header).
+/// the blank line above its header).
 fn line_of(text: &str, at: usize) -> usize {
     let at = at.min(text.len());
     let skip = text

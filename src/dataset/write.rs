@@ -93,8 +93,8 @@ pub fn dataset_toml(data: &FabricDataset, comment: &str) -> String {
     s
 }
 
-/// The CSV text of one curve (lab units as `elongation_mm,force_n`, forces before
-/// `force_scale`, every number written to round-trip).
+/// The CSV text of one curve (lab units as `elongation_mm,force_n`, forces without
+/// `force_scale` applied, every number written to round-trip).
 pub fn curve_csv(t: &TensileTest) -> String {
     let mut s = format!("{CURVE_HEADER}\n");
     for (e, f) in t.elongation.iter().zip(&t.force) {

@@ -1,8 +1,8 @@
 //! The homogeneous-strain strip: a tensile strip whose strain is uniform, with uniaxial stress
 //! along its axis (the transverse and shear stresses of the strip frame vanish). It costs a
-//! few 3 × 3 solves per point instead of a shell equilibrium, is differentiated exactly, and
-//! gives the fitter its initial guesses and its degree choice (Clyde et al. 2017 §5,
-//! "bootstrapping").
+//! few 3 × 3 solves per point, where a shell equilibrium costs a Newton solve of the cage, is
+//! differentiated exactly, and gives the fitter its initial guesses and its degree choice
+//! (Clyde et al. 2017 §5, "bootstrapping").
 //!
 //! With the strip strain e = (e_aa, e_tt, e_at) (axis, transverse, tensor shear) and L the
 //! linear map to the warp/weft strain Ẽ = L e, the energy is W(e) = ψ(L e). For a prescribed

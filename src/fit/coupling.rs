@@ -1,4 +1,4 @@
-//! The tension–shear coupling's trial (issue: a law that follows off-axis strips): after the
+//! The tension–shear coupling's trial (a law that follows off-axis strips): after the
 //! shear stage has chosen its degree on the first mesh level, the stage is refitted with the
 //! coupling κ₁, κ₂ of [`crate::material::ShearCoupling`] free, starting from κ = 0 (exactly
 //! the separable law's optimum, so the trial never starts worse). The coupled law is kept
@@ -9,9 +9,9 @@
 //!   module doc of `fit`): it lowers the shear stage's shape error by 30 %, or its rms
 //!   relative error by 30 % without raising the shape error. The rms alone would not do: a
 //!   coupling can absorb part of the repeats' scatter in scale (on the bundled cotton it
-//!   lowered the rms from 14.5 to 12.2 % while the shape error rose from 1.9 to 2.7 %); the
+//!   lowers the rms from 14.5 to 12.2 % while the shape error rises from 1.9 to 2.7 %); the
 //!   shape error alone misses a coupling that mostly rescales the off-axis curves (on strips
-//!   made with κ = −15 (32 × 48 data, first level) it fell by 36 %, the rms by 69 %);
+//!   made with κ = −15 (32 × 48 data, first level) it falls by 36 %, the rms by 69 %);
 //! - the law's tangent stays positive definite along the strains the strips exercise: the
 //!   homogeneous strip's strain path at each strip's angle, to twice its largest elongation
 //!   (the strip's interior; the clamped corners' singular strains are not a material state
@@ -20,20 +20,19 @@
 //! Otherwise the separable law stays and the log says why. Later levels refit κ with the
 //! stage. Under `auto` the trial is screened at its space-mapped start (the homogeneous
 //! strip's corrected steps, a few shell solves): when the shape error has risen there and the
-//! rms has not fallen by 30 %, the stage's own iterations are not run. Measured at that point
-//! (8 × 12): the bundled cotton 1.9 → 2.7 % shape, rms −6 %, and a separable fabric on data
-//! from 32 × 48 0.17 → 0.64 % shape, rms −10 %, both screened out; the two coupled fabrics
-//! passed it (shape 0.99 → 0.68 %, and rms 3.9 → 2.0 % at a shape 1.11 → 0.82 %), as did the
-//! skewed one, and the full refit kept the coupling in all three.
+//! rms has not fallen by 30 %, the stage's own iterations are not run. At that point (8 × 12)
+//! the screen rejects the bundled cotton (shape error up from 1.9 to 2.7 %, rms −6 %) and a
+//! separable fabric on data from 32 × 48 (shape error up from 0.17 to 0.64 %, rms −10 %), and
+//! passes the two coupled fabrics of `paper_repro/off_axis` and the skewed one, whose full
+//! refit keeps the coupling.
 //!
-//! The shear degree is not raised again once the coupling is kept. Tried (degree d + 1 from
-//! the coupled law, fitted in full, kept at the degree gain) on `paper_repro/off_axis`: the
-//! first level cannot tell a degree from its own mesh error at seven angles. The coupled
-//! fabric (made with degree 1) took degree 2 on 8 × 12 (shape error 0.60 → 0.30 %) and ended
-//! with a degenerate softening term (μ₂ = −0.011, α₂ = −329) at 112 s instead of 77; the
-//! skewed one (made with degree 2) was refused it (0.74 → 0.63 %). Judged on the first level's
-//! objective corrected by the second level's measured forces (a multigrid τ-correction) the
-//! raise changed no outcome and cost 4–20 s; forced with `--degree 2`, the skewed fabric's
+//! The shear degree is not raised again once the coupling is kept: on `paper_repro/off_axis`
+//! the first level cannot tell a degree from its own mesh error at seven angles. Raised there
+//! (degree d + 1 from the coupled law, fitted in full, kept at the degree gain), the coupled
+//! fabric (made with degree 1) takes degree 2 on 8 × 12 and ends with a degenerate softening
+//! term (μ₂ = −0.011, α₂ = −329) at nearly 1.5 times the time; judged on the first level's
+//! objective corrected by the second level's forces (a multigrid τ-correction) the raise
+//! changes no outcome and costs 4–20 s; forced with `--degree 2`, the skewed fabric's
 //! second shear term is dropped on 16 × 24 as negligible: with the coupling free, those data
 //! do not call for it (README, "Tension–shear coupling").
 

@@ -6,16 +6,16 @@
 //! A raise is tried from two starts when the first does not pay:
 //! 1. the new term bending where the bootstrap's degree-(d + 1) law puts the term farthest
 //!    from degree d's, moved by space-mapped steps on the homogeneous strip
-//!    ([`super::surrogate`]): cheap (one to three shell evaluations before the shell's own
+//!    ([`super::surrogate`]): cheap (one to three shell evaluations ahead of the shell's own
 //!    iterations), and enough where the homogeneous strip's law is a good guide;
 //! 2. the new term stiffer than every old one ([`stiff_beta`]), fitted by the shell's own
 //!    iterations alone. The homogeneous strip's degree-2 shear laws can be degenerate
-//!    (measured on the noise-free cotton of `paper_repro/mesh_independence`: weights −86.8 and
+//!    (on the noise-free cotton of `paper_repro/mesh_independence`: weights −86.8 and
 //!    87.8 on two nearly equal exponents), and the mapped steps then lead the shell into a
-//!    basin of its own: on 8 × 12 with the centre yarn rule the raise stopped at a term
-//!    saturating within the first percent of strain, shape error 0.96 % (objective 5.5e-4),
-//!    where the law that made the data scores 0.39 % (1.9e-4) on the same mesh. From the
-//!    stiff start the shell's iterations reached 0.36 % (1.4e-4), weights 0.73 and 0.27 on
+//!    basin of its own: on 8 × 12 with the centre yarn rule the raise from them stops at a
+//!    term saturating within the first percent of strain, shape error 0.96 % (objective
+//!    5.5e-4), where the law that made the data scores 0.39 % (1.9e-4) on the same mesh. From
+//!    the stiff start the shell's iterations reach 0.36 % (1.4e-4), weights 0.73 and 0.27 on
 //!    exponents 25 and 315 against the true 0.7 and 0.3 on 1 and 300.
 //!
 //! The better of the two (shape error) is judged; the other's records are dropped.

@@ -7,14 +7,14 @@
 //! the shear stage cannot correct it. The sweep refits each yarn stiffness over its own and
 //! every off-axis strip (η's shape held: the axial strips determine it), then the shear stage:
 //! block coordinate descent on the whole objective, each block over every curve it moves. One
-//! sweep reaches the joint optimum (two and four moved a11 by 0.5 % more, `tests/joint.rs`).
+//! sweep reaches the joint optimum (two and four move a11 by 0.5 % more, `tests/joint.rs`).
 
 use super::map::StageMap;
 use super::{FitError, FitOptions, Fitter, StageMode};
 
 /// Whether the sweep runs (`ks-fit fit --joint`; see the module doc). On the bundled denim the
 /// warp repeats lie at 0.62–1.15 of the law that made them, and without the sweep the fitted
-/// 67.5° strip fell 35 % below all three of its repeats.
+/// 67.5° strip falls 35 % below all three of its repeats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Joint {
     /// on, except under `--protocol paper` (the paper's staged fit, as published)

@@ -1,6 +1,6 @@
 //! The ladder of meshes (paper §5, "multiresolution"): the stages fitted coarse to fine, each
 //! level started from the last. A level that doubles the last is first solved at the last fit:
-//! those forces are the measured defect of the mesh check ([`super::mesh_check`]), whose
+//! those forces are the solved defect of the mesh check ([`super::mesh_check`]), whose
 //! first-order refit says whether the level is needed at all (no determined parameter moving
 //! by 1 %, no curve by 0.3 %) and which stages it would move (the others are not refitted).
 
@@ -28,11 +28,11 @@ pub(super) fn ladder(
     let all: Vec<usize> = strips.iter().flatten().copied().collect();
     let mut meshes = Vec::new();
     let mut previous: Option<Vec<f64>> = None;
-    // the refit change measured between the last two levels (parameters and curves)
+    // the refit change solved between the last two levels (parameters and curves)
     let mut last_check: Option<MeshCheck> = None;
     for (li, &level) in opts.ladder.iter().enumerate() {
         let from = meshes.last().copied().unwrap_or(level);
-        // is this level worth it? the last measured refit change, carried one level finer
+        // is this level worth it? the last solved refit change, carried one level finer
         if let (Some(m), true) = (&last_check, li >= 2) {
             let estimate = m.next_level(f.mesh_order());
             if estimate.passes() {
@@ -60,7 +60,7 @@ pub(super) fn ladder(
                 level.0,
                 level.1
             ));
-            // a doubling: the refit's parameter change, measured (the forces just solved
+            // a doubling: the refit's parameter change, solved (the forces just solved
             // are the check's defect); otherwise the forces' change decides
             let check = if level == (2 * from.0, 2 * from.1) {
                 f.refit_change(from)?

@@ -7,10 +7,10 @@
 //!
 //! **Bounded exponents.** A term μ(x + 1)^α contributes μ(1 + x)^(α−1) ≈ μ e^(β x/x̂) to η', so
 //! |β| ≤ B = [`BETA_MAX`] = 6 caps how much one term can stiffen (or soften) across the
-//! exercised range at e⁶ ≈ 400×. Fabrics need far less: the bundled materials reach β ≈ 1.6
-//! and the fitted laws before this bound β ≤ 3.2 wherever the term mattered; the degenerate
-//! laws that motivated it (μ = 2.5e-8 with α = 2168, β ≈ 16) fitted a knee at the last
-//! points with a term worth nothing anywhere else and e⁶⁴ at twice the strain. Beyond the
+//! exercised range at e⁶ ≈ 400×. Fabrics need far less: the bundled materials reach β ≈ 1.6,
+//! and fitted laws stay within β ≤ 3.2 wherever the term matters; what the bound excludes are
+//! degenerate laws (μ = 2.5e-8 with α = 2168, β ≈ 16) that fit a knee at the last points with
+//! a term worth nothing anywhere else and e⁶⁴ at twice the strain. Beyond the
 //! exercised range the fitter's cut-offs carry each term on as its quadratic Taylor
 //! extension, so the law there is finite and its stress linear in strain. The smooth map
 //! keeps the objective differentiable and needs no active set; its slope 1 − (β/B)² is in
@@ -172,9 +172,9 @@ impl StageMap {
 
     /// [`StageMap::encode`] as a minimiser's start: a coupling at its bound (|κ ê| above
     /// [`UNSATURATED`] of K) is moved inside it. There tanh is flat (dκ/dv ≈ 1e-9 at the
-    /// bound), so a stage started from a saturated κ could never move it back: measured on
-    /// strips made with κ₁ = −25 at 7 angles, the 8 × 12 level drove κ₁ to the bound
-    /// (−39.0, absorbing that mesh's error) and every finer level then left it there.
+    /// bound), so a stage started from a saturated κ could never move it back: on strips made
+    /// with κ₁ = −25 at 7 angles, the 8 × 12 level drives κ₁ to the bound (−39.0, absorbing
+    /// that mesh's error), where every finer level would leave it.
     pub fn encode_start(&self, law: &Orthotropic) -> Vec<f64> {
         let mut p = self.encode(law);
         if self.coupling {

@@ -1,6 +1,5 @@
 //! The mesh check: how much the fitted parameters and curves would change if the last mesh
-//! level were refined once more (issue "a material you can trust", item 1; `[fit]`
-//! `mesh_change`).
+//! level were refined once more (`[fit]` `mesh_change`).
 //!
 //! Refitting on the finer mesh would cost the whole last level again, several times over. The
 //! check instead takes one Gauss–Newton step of that refit from the fitted parameters, stage
@@ -37,7 +36,7 @@ pub enum MeshCheckMode {
     /// mesh at the order p of [`order`]: Δr(L → 2L) = −Δr(L → L/2)/2^p (Richardson)
     #[default]
     Coarse,
-    /// on the mesh twice as fine as the last level: measured, several times the cost
+    /// on the mesh twice as fine as the last level: solved there, several times the cost
     Fine,
 }
 
@@ -67,7 +66,7 @@ pub fn order(
 }
 
 /// The yarn-to-shear ratio from which [`order`] takes the slow order of nearly inextensible
-/// yarns: measured at 2.0 up to 200, 0.6–0.9 at 1000.
+/// yarns: the order is 2.0 up to 200, 0.6–0.9 at 1000.
 pub const STIFF_FROM_RATIO: f64 = 200.0;
 
 /// What a stage fitted, for the check.
@@ -195,8 +194,8 @@ fn gauss_newton_step(j: &DMatrix<f64>, dr: &[f64]) -> Option<DVector<f64>> {
 }
 
 impl MeshCheck {
-    /// The issue's criterion of a mesh-independent fit: no determined parameter moves by
-    /// 1 %, no fitted curve by 0.3 %, no drape angle by 0.1°.
+    /// The criterion of a mesh-independent fit: no determined parameter moves by 1 %, no
+    /// fitted curve by 0.3 %, no drape angle by 0.1°.
     pub fn passes(&self) -> bool {
         self.change < 0.01
             && self.curve_change < 3e-3
@@ -274,8 +273,8 @@ impl Fitter<'_> {
                 Direction::Weft => self.law.weft.degree(),
                 Direction::Shear => self.law.shear.degree(),
             };
-            // the stage's linearisation on `level`, or on the coarser level it was last
-            // fitted on (a stage the ladder did not refit)
+            // the stage's linearisation on `level`, or on the coarser level of its last fit
+            // (a stage the ladder did not refit)
             let found = self.linearised.iter().rev().find(|l| {
                 l.dir == Some(dir)
                     && l.level.0 <= level.0
@@ -322,7 +321,7 @@ impl Fitter<'_> {
         Ok(runs.into_iter().map(|r| r.0).collect())
     }
 
-    /// The refit change from `from` to the mesh twice as fine, measured there (the ladder's
+    /// The refit change from `from` to the mesh twice as fine, solved there (the ladder's
     /// test of whether that level is needed); `None` when no stage has a linearisation.
     pub(super) fn refit_change(
         &mut self,
@@ -631,9 +630,9 @@ mod tests {
         }
     }
 
-    /// The ladder's decisions: the issue's 1 % / 0.3 % / 0.1° rule, its carrying one level
-    /// finer at order q, and each stage's own change (as a·τ: the thickness's rescaling of a
-    /// added back).
+    /// The ladder's decisions: the 1 % / 0.3 % / 0.1° rule of `MeshCheck::passes`, its
+    /// carrying one level finer at order q, and each stage's own change (as a·τ: the
+    /// thickness's rescaling of a added back).
     #[test]
     fn the_ladder_decides_by_the_rule_and_by_each_stage() {
         use super::super::map::Direction;

@@ -57,6 +57,7 @@ pub mod preprocess;
 mod refine;
 pub mod report;
 mod rigs;
+pub mod shape_target;
 pub mod shapes;
 mod stages;
 pub use joint::Joint;
@@ -64,6 +65,7 @@ use joint::StageSets;
 use stages::StageMode;
 mod surrogate;
 mod thickness;
+pub mod tri;
 mod tolerances;
 pub mod uncertainty;
 mod validation;
@@ -104,9 +106,10 @@ pub struct FitOptions {
     pub ladder: Vec<(usize, usize)>,
     pub method: Method,
     /// Skip a finer level when it changes the fitted forces by less than this, mean relative
-    /// (measured, for the second level); later levels are estimated from the last change at
-    /// the mesh check's order (`mesh_check::order`) and judged by its 1 % / 0.3 % rule. Default 1 %: below the repeat-to-repeat scatter of
-    /// real tests and the paper's fit errors (Table 3: 1–5 %).
+    /// (solved, for the second level); later levels are estimated from the last change at
+    /// the mesh check's order (`mesh_check::order`) and judged by its 1 % / 0.3 % rule.
+    /// Default 1 %: below the repeat-to-repeat scatter of real tests and the paper's fit
+    /// errors (Table 3: 1–5 %).
     pub skip_tol: f64,
     /// A degree is raised only if that lowers the mean relative error by at least this factor.
     pub degree_gain: f64,
@@ -239,7 +242,7 @@ pub struct FitStats {
     /// (stage, Newton iterations), in the order of `stage_seconds`: where the solver's work
     /// goes
     pub stage_iterations: Vec<(String, usize)>,
-    /// `newton_iterations` when the last stage was timed
+    /// `newton_iterations` at the last timed stage
     counted: usize,
 }
 
@@ -252,14 +255,14 @@ pub struct FitResult {
     pub stats: FitStats,
     /// degree choice, one line per direction and degree tried
     pub degree_log: Vec<String>,
-    /// what was not fitted and why, choices made
+    /// what the fit leaves out and why, choices made
     pub notes: Vec<String>,
-    /// what the data determine and what was assumed
+    /// what the data determine and what is assumed
     pub identifiability: Vec<String>,
     /// standard errors of the fitted parameters at the optimum, last mesh level
     pub uncertainty: Vec<uncertainty::ParamError>,
     pub tests: Vec<TestOutcome>,
-    /// the `max_error` the fit was asked for (the table's `verdict` column reads it)
+    /// the `max_error` the fit is asked for (the table's `verdict` column reads it)
     pub max_error: f64,
     /// how much one more mesh refinement would change the fit (`None`: not run)
     pub mesh_check: Option<MeshCheck>,
@@ -316,8 +319,8 @@ struct Fitter<'a> {
     stage_errors: Vec<uncertainty::ParamError>,
     /// every stage's linearisation at its optimum, for the mesh check
     linearised: Vec<mesh_check::Linearised>,
-    /// the refit change the ladder measured at its last level when it stopped there (the
-    /// finer level solved): the final mesh check, measured rather than estimated
+    /// the refit change the ladder solves at its last level when it stops there (the finer
+    /// level solved): the final mesh check, solved rather than estimated
     ladder_check: Option<MeshCheck>,
     /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
     bend_refine: u32,
@@ -338,7 +341,7 @@ struct Fitter<'a> {
     /// the rms relative error of the last tensile stage run (of the kept degree after a
     /// degree ladder)
     stage_rms: f64,
-    /// the shape and rms errors at a screened trial's mapped start, when it was given up there
+    /// the shape and rms errors at a screened trial's mapped start, when it is given up there
     screened: Option<(f64, f64)>,
 }
 
@@ -398,8 +401,8 @@ impl Fitter<'_> {
         p.iter().map(|v| v.to_bits()).collect()
     }
 
-    /// Adds the seconds since `t`, and the Newton iterations since the last stage was timed,
-    /// to `stage`.
+    /// Adds the seconds since `t`, and the Newton iterations since the last timed stage, to
+    /// `stage`.
     fn time_stage(&mut self, stage: &str, t: Instant) {
         let s = t.elapsed().as_secs_f64();
         let st = &mut self.stats;
@@ -478,8 +481,8 @@ impl Fitter<'_> {
     /// largest Green strain e along a strip: e² for the yarns, (e/2)² for the shear (a strip
     /// at 45° of an isotropic sheet). Bias strips of fabrics shear more, as a trellis (the
     /// bundled ones reach Ẽ12 ≈ 1.1 e), so the shear's exponent bound is looser over the range
-    /// actually reached; e² there (tried) lost the good degree-2 optimum of the homogeneous
-    /// strip's bootstrap (1.7 % instead of 0.11 % on a noise-free degree-2 shear).
+    /// actually reached; e² there loses the good degree-2 optimum of the homogeneous strip's
+    /// bootstrap (1.7 % against 0.11 % on a noise-free degree-2 shear).
     fn xhat(&self, dir: Direction, strips: &[usize]) -> f64 {
         let e = strips
             .iter()
@@ -634,7 +637,7 @@ pub fn fit(
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
     let strict = opts.test_meshes == TestMeshes::Strict;
     if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
-        // the ladder's measured check was made on the meshes before the per-test refinement
+        // the ladder's solved check is of the meshes ahead of the per-test refinement
         f.ladder_check = None;
     }
     let t0 = Instant::now();

@@ -8,8 +8,8 @@
 //! step back.
 //!
 //! Each stops at an iteration limit, an objective target, a gradient tolerance, a step that
-//! lowers ε by less than a fraction of itself, or (`xtol`) before trying a (quasi-)Newton
-//! step that would move every variable by less than a tolerance: a polish whose optimum is
+//! lowers ε by less than a fraction of itself, or (`xtol`) at a (quasi-)Newton step that would
+//! move every variable by less than a tolerance, without trying it: a polish whose optimum is
 //! that near gains nothing from the line search's evaluations.
 
 use nalgebra::{DMatrix, DVector};
@@ -209,7 +209,7 @@ fn bfgs(
     report.objective = f;
 }
 
-/// Why to stop before taking a step from ε = f with gradient g, if at all.
+/// Why to stop, without taking a step, at ε = f with gradient g, if at all.
 fn stop_before_step(f: f64, g: &DVector<f64>, opts: &OptimOptions) -> Option<&'static str> {
     if f <= opts.target {
         Some("objective below target")

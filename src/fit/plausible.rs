@@ -1,5 +1,4 @@
-//! Laws the data determine and that behave: the checks every fitted η passes (issue "a
-//! material you can trust", item 2).
+//! Laws the data determine and that behave: the checks every fitted η passes.
 //!
 //! - **Bounded exponents**: |α x̂| ≤ [`BETA_MAX`](super::map::BETA_MAX), built into the stage
 //!   variables ([`super::map`]).
@@ -120,9 +119,9 @@ pub(super) fn exercised(dir: Direction, range: &StrainRange) -> f64 {
 /// exponent farthest from every exponent the shell's degree-d law `prev` already has. A new
 /// term bending where an old one does adds nothing the old one cannot, so the gradient
 /// towards it vanishes and the stage stalls; the bootstrap's term order is arbitrary (two
-/// equal optima differ by a swap), so its last term is no choice at all. Measured on a
-/// degree-2 shear law (μ = 0.7, 0.3; α = 1, 300): from β = 0.39, next to the shell's 0.53, the
-/// 45° strip stalled at 3.6 %; from the bootstrap's other exponent, 0.11, it fits to 0.03 %.
+/// equal optima differ by a swap), so its last term is no choice at all. On a degree-2 shear
+/// law (μ = 0.7, 0.3; α = 1, 300): from β = 0.39, next to the shell's 0.53, the 45° strip
+/// stalls at 3.6 %; from the bootstrap's other exponent, 0.11, it fits to 0.03 %.
 pub(super) fn new_term_beta(map: StageMap, prev: &[f64], cand: &[f64]) -> f64 {
     let betas = |p: &[f64]| -> Vec<f64> {
         let (d, a) = (map.degree(p), map.first_alpha(p));

@@ -2,18 +2,19 @@
 //! and the strips the model solves (one per angle and geometry, shared by its repeats, solved
 //! at a few elongation nodes and interpolated to every measured point).
 //!
-//! **Toe compensation.** A hand-mounted strip starts slack (the force rises slowly before the
+//! **Toe compensation.** A hand-mounted strip starts slack (the force rises slowly until the
 //! strip is taut) or preloaded (a force at zero elongation). Both shift the elongation axis.
 //! The start of the curve (the points from 2 % to 40 % of the largest force, widened to 60, 80
-//! and 100 % where fewer than 8 points lie there; below 2 % a slack strip creeps) is fitted twice by least
-//! squares: by a cubic through the origin, and by a hinge, zero up to an elongation s and a
-//! cubic in (e − s) after it, s found by a search. When the hinge fits at least ten times
-//! better (residual sum of squares) the curve has a toe (a slack one only when at least two
-//! measured points lie before s: the creep must be in the data): its zero moves to s (the tangent of
-//! the steep region extended to zero force, in the limit of a sharp knee), points before it are
-//! dropped, the rest shifted, and the strip's rest length taken as gauge + s (a slack strip is
-//! that much longer, a preloaded one that much shorter). A smooth curve through the origin,
-//! stiffening or not, is fitted by the cubic already and keeps its zero. s < 0 is a preload.
+//! and 100 % where fewer than 8 points lie there; below 2 % a slack strip creeps) is fitted
+//! twice by least squares: by a cubic through the origin, and by a hinge, zero up to an
+//! elongation s and a cubic in (e − s) after it, s found by a search. When the hinge fits at
+//! least ten times better (residual sum of squares) the curve has a toe (a slack one only when
+//! at least two measured points lie below s: the creep must be in the data): its zero moves to
+//! s (the tangent of the steep region extended to zero force, in the limit of a sharp knee),
+//! points below it are dropped, the rest shifted, and the strip's rest length taken as
+//! gauge + s (a slack strip is that much longer, a preloaded one that much shorter). A smooth
+//! curve through the origin, stiffening or not, is fitted by the cubic already and keeps its
+//! zero. s < 0 is a preload.
 
 use super::FitError;
 use crate::dataset::{FabricDataset, Role, TensileTest};
@@ -52,7 +53,7 @@ pub struct Curve {
     pub toe_auto: bool,
     /// (elongation after the toe, force) of every point the objective uses, m and N
     pub points: Vec<(f64, f64)>,
-    /// points left out (before the toe, or with forces under 1e-3 of the largest)
+    /// points left out (in the toe, or with forces under 1e-3 of the largest)
     pub dropped: usize,
     /// index of its strip in [`Prepared::strips`]
     pub strip: usize,
@@ -138,7 +139,7 @@ pub fn detect_toe(elongation: &[f64], force: &[f64]) -> f64 {
     }
     let e_end = pts.last().map_or(0.0, |p| p.0);
     // the search may reach back to the first measured point (a slack strip's zero lies
-    // before the steep region)
+    // ahead of the steep region)
     let rss0 = cubic_rss(&pts, 0.0);
     // s from a preload of a quarter of the region to three quarters of it: a grid, then
     // golden-section refinement around the best grid point
@@ -165,7 +166,7 @@ pub fn detect_toe(elongation: &[f64], force: &[f64]) -> f64 {
     let rss = cubic_rss(&pts, s);
     let total: f64 = pts.iter().map(|p| p.1 * p.1).sum();
     // a hinge has one parameter more than the cubic: it must fit ten times better, beyond
-    // round-off; slack also needs measured evidence: two points or more before the new zero
+    // round-off; slack also needs measured evidence: two points or more below the new zero
     // (the creep), or a smooth stiffening curve sampled coarsely could pass for slack
     let creep = elongation.iter().filter(|&&e| e < s).count();
     let better = rss * 10.0 < rss0 && rss0 > 1e-5 * total;
@@ -213,15 +214,15 @@ pub fn interpolation_weights(nodes: &[f64], x: f64) -> Vec<(usize, f64)> {
 /// Node elongations for a strip whose largest measured elongation is `emax`: Chebyshev–Lobatto
 /// spacing, emax (1 − cos(πk/n))/2, dense at both ends, where the curves bend most (the start
 /// of a bias strip, and the strain cut-off at 95 % of the largest strain). On the strips of a
-/// strongly stiffening degree-2 law, 12 such nodes kept a local cubic interpolant within
+/// strongly stiffening degree-2 law, 12 such nodes keep a local cubic interpolant within
 /// 0.15 % of solves at 120 elongations (10 evenly spread: 1.7 %; 14 of these: 0.08 %).
 ///
-/// The interpolant is a local quintic ([`STENCIL`]): its error falls as h⁶ where the cubic's
-/// fell as h⁴. Measured on the five bundled fabrics (the end-of-fit check: solves halfway
-/// between the nodes on 8 × 12), the largest error of the default fits and of the paper
-/// protocol's: 12 nodes with cubics 0.111 % and 0.153 % (canvas's and silk's warned, above
-/// 0.1 %); quintics on 8 nodes 0.111 % and 0.243 % (four fits warned); on 9 nodes 0.080 % and
-/// 0.096 % (none), so 9 is the default (`--nodes`): a quarter fewer equilibria than 12.
+/// The interpolant is a local quintic ([`STENCIL`]): its error falls as h⁶ where a cubic's
+/// falls as h⁴. On the five bundled fabrics (the end-of-fit check: solves halfway between the
+/// nodes on 8 × 12), the largest error of the default fits and of the paper protocol's is
+/// 0.080 % and 0.096 % with quintics on 9 nodes (no warning), against 0.111 % and 0.243 % on
+/// 8 nodes (four fits warned, above 0.1 %) and 0.111 % and 0.153 % with cubics on 12 (canvas
+/// and silk warned), so 9 is the default (`--nodes`): a quarter fewer equilibria than 12.
 pub fn nodes_for(emax: f64, n: usize) -> Vec<f64> {
     (1..=n)
         .map(|k| emax * 0.5 * (1.0 - (std::f64::consts::PI * k as f64 / n as f64).cos()))

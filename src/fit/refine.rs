@@ -1,5 +1,4 @@
-//! Each test's mesh is its own (issue "real lab data", item 8; issue "a material you can
-//! trust", item 1). After the ladder:
+//! Each test's mesh is its own. After the ladder:
 //!
 //! 1. every strip whose estimated discretisation error exceeds a third of its curves' fit error
 //!    and 0.3 % is refined once more (faces doubled across and along, on top of the ladder's
@@ -64,10 +63,10 @@ impl TestMeshes {
 pub(super) const MAX_DOUBLINGS: u32 = 3;
 /// A strip is not refined past this many faces: a 64 × 96 cage, the standard 50 × 75 mm strip
 /// doubled twice from the 16 × 24 level (2.7 s a point, against 0.4 s on 32 × 48: the skewed
-/// fabric of `paper_repro/off_axis` at 60°, 2 cores). It was 4096 (64 × 64) until 2026-12-07,
-/// which stopped that strip on 32 × 48 with its curve moving by 0.48–0.49 % in the mesh check.
+/// fabric of `paper_repro/off_axis` at 60°, 2 cores). A cap at 64 × 64 (4096) would stop that
+/// strip on 32 × 48 with its curve moving by 0.48–0.49 % in the mesh check.
 pub(super) const MAX_FACES: usize = 6144;
-/// The floor of a test's mesh tolerance (the issue's 0.3 %).
+/// The floor of a test's mesh tolerance (0.3 %, the mesh check's curve criterion).
 pub(super) const MESH_FLOOR: f64 = 3e-3;
 
 /// The tolerance a curve's estimated mesh error must meet: a third of its fit error, and no
@@ -158,7 +157,7 @@ impl Fitter<'_> {
 }
 
 /// Refines every strip that misses its tolerance and refits the stages it belongs to (see the
-/// module doc); `stages[k]` are stage k's fitted strips. Returns whether any strip was refined.
+/// module doc); `stages[k]` are stage k's fitted strips. Returns whether any strip is refined.
 pub(super) fn refine_tests(
     f: &mut Fitter,
     maps: &[StageMap],
@@ -195,7 +194,7 @@ pub(super) fn refine_tests(
 /// or rigidity moving by 1 % or a drape angle by 0.1°: the bends; with `curves`, a fitted
 /// curve moving by 0.3 %: its strip): doubles those meshes and refits. Without `curves` a
 /// curve moving by 0.3 % alone refines nothing here; the check's warning reports it. Returns
-/// whether any test was refined.
+/// whether any test is refined.
 pub(super) fn refine_for_check(
     f: &mut Fitter,
     maps: &[StageMap],

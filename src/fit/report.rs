@@ -8,8 +8,8 @@ use crate::io::num;
 use crate::material::material_toml;
 use std::fmt::Write;
 
-/// A TOML basic string ([`crate::io::toml_string`]; the `{:?}` used here before made a fit file
-/// with a combining mark in a note or a file name unreadable).
+/// A TOML basic string ([`crate::io::toml_string`]; `{:?}` would make a fit file with a
+/// combining mark in a note or a file name unreadable).
 fn toml_str(s: &str) -> String {
     crate::io::toml_string(s)
 }

@@ -10,8 +10,8 @@ use crate::scene::{SceneError, StripRig, TensileStrip};
 
 /// A strip mesh at a ladder level: the level's 50 × 75 mm element size (h = 50 mm / NX) on the
 /// strip, but at least NX/4 faces across (a 2 mm strip gets 2, 4, 8 across on the default
-/// ladder instead of 2 at every level) and elements at most 4 times longer than wide; at most
-/// 2000 along.
+/// ladder, where the element size alone gives it 2 at every level) and elements at most 4
+/// times longer than wide; at most 2000 along.
 pub(super) fn strip_mesh(level: (usize, usize), width: f64, length: f64) -> (usize, usize) {
     let h = 0.05 / level.0 as f64;
     let across = ((width / h).round() as usize).max(level.0 / 4).max(2);
@@ -28,8 +28,7 @@ pub(super) type NodeForces = (Vec<f64>, Vec<Vec<f64>>);
 
 /// A node's predicted force: NaN where its equilibrium is a saddle (the strip would wrinkle
 /// there and the flat state's force is not what a lab measures), so that every measured point
-/// interpolated from it is excluded, never silently compared (issue "a material you can
-/// trust", item 5).
+/// interpolated from it is excluded, never silently compared.
 pub(super) fn node_force(p: &crate::scene::TensilePoint) -> f64 {
     if p.report.stable {
         p.force
@@ -40,7 +39,7 @@ pub(super) fn node_force(p: &crate::scene::TensilePoint) -> f64 {
 
 impl Fitter<'_> {
     /// The yarn rule of every solve of the fit: `--yarn-rule`, with `auto` decided once by
-    /// the law after the bootstrap ([`Fitter::decide_yarns`]; the full rule before).
+    /// the law after the bootstrap ([`Fitter::decide_yarns`]; the full rule until then).
     pub(super) fn yarns(&self) -> YarnRule {
         self.yarns.unwrap_or(YarnRule::Full)
     }
@@ -232,9 +231,8 @@ impl Fitter<'_> {
     /// mesh and its half) solved in one batch, so that a long solve on one level keeps one core
     /// while the other takes the rest (the ratio-2e4 fit of `paper_repro/stiff_fit`: its
     /// wrinkling 67.5° strip takes 36 s on 16 × 24, its nine other solves of the first per-test
-    /// sweep 21 s; that sweep took 43 s with the levels one after the other and before the
-    /// cheap phase's early end in `scene::tensile`, 39 s with both, in one batch split in
-    /// halves, and 37 s taken in order).
+    /// sweep 21 s, and the sweep as one batch taken in order 37 s, against 39 s with the batch
+    /// split in halves).
     pub(super) fn predict_levels(
         &mut self,
         jobs: &[(usize, f64, (usize, usize))],

@@ -12,18 +12,18 @@
 //! the assumed value, and the best bracket then narrowed by golden section on ln G12 to 0.1 %
 //! (about 31 scene solves; 0.85 s each for the 12 × 12 frame).
 //!
-//! Wrinkles are a weak witness: their branch can change with the mesh (measured in
-//! `tests/shape_fit.rs`). Where the shell reproduces no shape within [`SHAPE_TRUST`] at the
+//! Wrinkles are a weak witness: their branch can change with the mesh (`tests/shape_fit.rs`
+//! shows it). Where the shell reproduces no shape within [`SHAPE_TRUST`] at the
 //! optimum, G12 is fitted to the measured forces alone (the picture frame is the lab's shear
 //! test; its force converges with the mesh where the wrinkles do not), reusing the scan's
 //! solves; without a measured force G12 stays assumed and a warning says why.
 
 use super::{FitError, Fitter};
-use crate::shape::target::ShapeTarget;
-use crate::tri::fit::SHAPE_TRUST;
+use crate::fit::shape_target::ShapeTarget;
+use crate::fit::tri::SHAPE_TRUST;
 use std::time::Instant;
 
-/// The note a fit without an off-axis test carries (its start says why G12 was not fitted).
+/// The note a fit without an off-axis test carries (its start says why G12 is not fitted).
 pub const SHEAR_ASSUMED: &str = "shear not fitted (no off-axis test)";
 
 /// Scan points each side of the start: factors 2^(j/2), j = −SCAN…SCAN.
@@ -153,8 +153,8 @@ impl Fitter<'_> {
             (g12, f, "shape(s) and force(s)")
         } else if with_force {
             // wrinkles are not the lab's: their branch can change with the mesh while the
-            // frame's force does not (measured: the shell's own 30° frame of a stiff-shear
-            // cotton on 24 × 24 against 12 × 12, positions 181 % apart, forces 0.4 %)
+            // frame's force does not (the shell's own 30° frame of a stiff-shear cotton on
+            // 24 × 24 against 12 × 12: positions 181 % apart, forces 0.4 %)
             self.notes.push(format!(
                 "the shell does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %; buckled wrinkles take another branch on this mesh), so G12 is fitted to the measured force(s) alone",
                 describe(&at_shapes),

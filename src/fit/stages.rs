@@ -20,7 +20,7 @@ pub(super) enum StageMode {
     /// better law
     Raise,
     /// every variable, a degree just raised, fitted whatever its space-mapped start finds
-    /// (`--degree`, where giving the raise up had left the shear at degree 1 under
+    /// (`--degree`: giving the raise up could leave the shear at degree 1 under
     /// `--degree 2`)
     RaiseAlways,
     /// every variable, a degree just raised, fitted by the shell's own iterations without
@@ -164,8 +164,8 @@ impl Fitter<'_> {
     /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
     /// whose mapped steps find no better law is given up (`None`): a bet that the shell's own
     /// iterations from a zero-weight term would not buy the degree gain either (on noise-free
-    /// cotton they gained nothing in one iteration and 10 s; on the bundled fabrics, before the
-    /// mapped start, degree 2 gained −3 to 23 % of shape error, never the 30 % needed). A finer
+    /// cotton they gain nothing in one iteration and 10 s; on the bundled fabrics, without the
+    /// mapped start, degree 2 gains −3 to 23 % of shape error, never the 30 % needed). A finer
     /// level's stage takes the mapped steps only where its own Gauss–Newton step promises them
     /// work (below).
     pub(super) fn shell_stage(
@@ -296,7 +296,7 @@ impl Fitter<'_> {
         // nor does a finer level's stage whose own Gauss–Newton step, from the Jacobian just
         // solved, is predicted to gain less than the stage asks of an iteration: it starts at
         // the coarser level's optimum, and there the mapped proposals of the bundled default
-        // fits were all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
+        // fits are all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
         // model"), each a shell evaluation thrown away
         let direct = mode == StageMode::RaiseDirect;
         let rounds = if direct || stiffness_only || (!first_level && gn_gain < opts.rel_decrease) {

@@ -15,10 +15,10 @@
 //! agrees with the shell at p_k and costs a few 3 × 3 solves per point. Minimising the
 //! objective on s̃ (Gauss–Newton from several starts, milliseconds) proposes p_{k+1}; the
 //! shell is solved there once, and the proposal is kept only if the shell's own objective
-//! fell. Why it is needed: a stage that raises a law's degree starts from the lower degree's
+//! falls. Why it is needed: a stage that raises a law's degree starts from the lower degree's
 //! optimum with a zero-weight term, whose exponent has no gradient there, and the valley to
 //! the higher degree's optimum is long and curved. On a noise-free degree-2 shear, plain
-//! hybrid Gauss–Newton/BFGS on the shell stopped at 1.95 % rms after 4 iterations (at 0.51 %
+//! hybrid Gauss–Newton/BFGS on the shell stops at 1.95 % rms after 4 iterations (at 0.51 %
 //! after 25 with a tighter tolerance, 65 s), where the mapped start reaches the basin in one
 //! or two shell solves.
 

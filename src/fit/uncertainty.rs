@@ -512,8 +512,8 @@ mod tests {
 
     /// Why the coupling's factor exp(κ₁ ê) is no measure of what the strips determine: with
     /// stiff yarns the strips' yarns stretch far less than ê, so every off-axis stress moves
-    /// with κ₁ by a fraction of what the factor does (measured: 2–5 % of it at 15° and 45°,
-    /// 13–25 % at 75°, nearest the warp).
+    /// with κ₁ by a fraction of what the factor does (2–5 % of it at 15° and 45°, 13–25 % at
+    /// 75°, nearest the warp).
     #[test]
     fn the_strips_see_a_fraction_of_the_coupling_factor() {
         let (prep, law, map, p) = coupled_stage();

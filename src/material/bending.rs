@@ -1,4 +1,4 @@
-//! Bending of its own: flexural rigidities per direction instead of the paper's τ³/12 link to
+//! Bending of its own: flexural rigidities per direction in place of the paper's τ³/12 link to
 //! the membrane law.
 //!
 //! In the paper's model (Clyde et al. 2017 §3) the bending energy is the membrane law

@@ -39,7 +39,7 @@
 //! ```
 //!
 //! An optional `[bending]` table gives the bending its own rigidities (see [`super::bending`])
-//! instead of the paper's τ³/12 link to the membrane law:
+//! in place of the paper's τ³/12 link to the membrane law:
 //!
 //! ```toml
 //! [bending]         # flexural rigidity per unit width, N·m (ASTM D1388's G = ρ g c³)
@@ -200,12 +200,22 @@ pub(crate) fn line_of_key(text: &str, table: Option<&str>, key: &str) -> Option<
 }
 
 /// Moduli a material file may give, Pa: far below and above any fabric, but within what the
-/// solver's tolerances and double precision handle (1e-300 Pa gave negative forces).
+/// solver's tolerances and double precision handle (1e-300 Pa gives negative forces).
 pub const MODULUS_RANGE: (f64, f64) = (1.0, 1e13);
+
+/// The model kind of a file that has a `[model]` table and no shell law, if it is one.
+pub fn model_only(text: &str) -> Option<String> {
+    let v: toml::Value = toml::from_str(text).ok()?;
+    let t = v.as_table()?;
+    if t.contains_key("a11_pa") {
+        return None;
+    }
+    Some(t.get("model")?.get("kind")?.as_str()?.to_string())
+}
 
 /// Parses and checks material TOML; `path` names it in errors.
 pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, MaterialFileError> {
-    if let Some(kind) = crate::tri::file::model_only(text) {
+    if let Some(kind) = model_only(text) {
         return Err(MaterialFileError {
             path: path.to_string(),
             line: line_of_key(text, Some("model"), "kind"),

@@ -28,7 +28,7 @@
 //! off-axis strips at finite strain see κ. The yarn part ψ(Ẽ₁₁, Ẽ₂₂, 0) is unchanged, which is
 //! what the centre rule of the yarn terms needs. **Cut-offs:** each g_i is continued past the
 //! Ẽ_ii cut-offs by its quadratic Taylor polynomial, exp(κe_c)(1 + κδ + κ²δ²/2) > 0, and η₄'s
-//! term as before; a product of C² factors is C², and g stays positive. **Convexity:** with
+//! term as above; a product of C² factors is C², and g stays positive. **Convexity:** with
 //! h = G₁₂η₄(Ẽ₁₂²) the coupled term's Hessian in (Ẽ₁₂, Ẽ₁₁) has determinant
 //! g²κ₁²(h h'' − h'²) < 0 (for η₄ linear, −2κ₁²G₁₂²Ẽ₁₂²g²): the term alone is not convex, and
 //! the law is convex while the yarn stiffness outweighs it, a₁₁ ≳ G₁₂ κ₁² Ẽ₁₂² g (for the

@@ -5,12 +5,34 @@
 //! Miguel et al. 2012 ([`crate::tri`]) are the others. Everything in [`crate::solve`] works on
 //! any of them.
 
-pub mod compare;
+pub mod blocks;
 
-use crate::assembly::{BlockMatrix, BlockPattern, ShellModel, Want};
+pub use blocks::{BlockMatrix, BlockPattern};
 use crate::material::OutOfDomain;
 use crate::Vec3;
 use std::sync::Arc;
+
+/// What to assemble.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Want {
+    Energy,
+    Gradient,
+    Hessian,
+    /// A convexified Hessian: at every Gauss point the section tangent is projected onto its
+    /// positive semidefinite part, the membrane stress weighting the strains' own Hessian is
+    /// replaced by its tensile part, and the bending moments' term is dropped, so that the
+    /// assembled matrix is positive semidefinite (a modified-Newton model; see
+    /// `solve::newton`).
+    ProjectedHessian,
+}
+
+impl Want {
+    /// Whether a Hessian (exact or projected) is wanted.
+    #[inline(always)]
+    pub fn hessian(self) -> bool {
+        matches!(self, Want::Hessian | Want::ProjectedHessian)
+    }
+}
 
 /// A discretised cloth whose equilibria are the stationary points of a total energy.
 pub trait ClothModel: Sync {
@@ -35,39 +57,9 @@ pub trait ClothModel: Sync {
         self.assemble(x, Want::Energy, None, None)
     }
     /// Whether [`Want::ProjectedHessian`] gives a convexified Hessian (the shell's, see
-    /// [`crate::assembly::Want`]); models without one hand back their exact Hessian there, and
+    /// [`Want`]); models without one hand back their exact Hessian there, and
     /// the solver does not ask them for it.
     fn convexifies(&self) -> bool {
         false
-    }
-}
-
-impl ClothModel for ShellModel {
-    fn pattern(&self) -> &Arc<BlockPattern> {
-        &self.pattern
-    }
-    fn num_nodes(&self) -> usize {
-        ShellModel::num_nodes(self)
-    }
-    fn assemble(
-        &self,
-        x: &[Vec3],
-        want: Want,
-        grad: Option<&mut [Vec3]>,
-        hess: Option<&mut BlockMatrix>,
-    ) -> Result<f64, OutOfDomain> {
-        ShellModel::assemble(self, x, want, grad, hess)
-    }
-    fn external_load(&self) -> Vec<Vec3> {
-        ShellModel::external_load(self)
-    }
-    fn lumped_mass(&self) -> Vec<f64> {
-        ShellModel::lumped_mass(self)
-    }
-    fn energy(&self, x: &[Vec3]) -> Result<f64, OutOfDomain> {
-        ShellModel::energy(self, x)
-    }
-    fn convexifies(&self) -> bool {
-        true
     }
 }

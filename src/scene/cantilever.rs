@@ -297,7 +297,7 @@ pub struct CantileverBend {
     /// Hold every control point's x coordinate (across the width): bending in the y–z plane
     /// only, as beam benchmarks assume. Off by default. Needed for an end moment beyond about
     /// 0.93 of the full circle: there the planar equilibrium under the fixed-axis moment is a
-    /// saddle of the full 3-D problem (an out-of-plane twisting mode; measured on the Sze 3.2
+    /// saddle of the full 3-D problem (an out-of-plane twisting mode, as on the Sze 3.2
     /// strip, 2 × 32), so an unconstrained solve leaves the plane.
     pub in_plane: bool,
     pub solver: NewtonOptions,
@@ -308,7 +308,7 @@ pub struct CantileverBend {
     pub yarn_rule: YarnRule,
 }
 
-/// The measured bend.
+/// The bend as the instrument reads it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BendResult {
     /// Chord angle from the platform edge to the free-end tip, below horizontal, degrees.
@@ -516,12 +516,13 @@ impl CantileverBend {
     }
 }
 
-/// Iterations allowed to Newton from the elastica start before the load ramp takes over.
+/// Iterations allowed to Newton from the elastica start; past them the load ramp takes over.
 const ELASTICA_ITERATIONS: usize = 60;
 
-/// Iterations allowed to a warm start before the elastica's start takes over (full-step
-/// strategy): near parameters converge in 2–5; the ratio-2e4 fit's thickness stage, stepping
-/// τ from 0.6 to 0.3 mm, spent 60 on warm starts that failed, where the elastica took 21.
+/// Iterations allowed to a warm start; past them the elastica's start takes over (full-step
+/// strategy): near parameters converge in 2–5, while a large step of the parameters (the
+/// ratio-2e4 fit's thickness stage steps τ from 0.6 to 0.3 mm) converges faster from the
+/// elastica (21 iterations) than from warm starts that fail.
 const WARM_ITERATIONS: usize = 20;
 
 /// A warp or weft strip bent onto the heavy elastica of its beam rigidity

@@ -103,8 +103,8 @@ impl Drape {
         let system = sheet.system(&held, false)?;
         let bump = sheet.perturbation(self.seed);
         // the weight comes on with the sheet flat (an in-plane problem); the offset is added
-        // before the corners move: on a vertical sheet with no load the turn about the line
-        // of the pins costs nothing, and a curved start made Newton crawl (16 × 16 failed at
+        // ahead of the corners' move: on a vertical sheet with no load the turn about the line
+        // of the pins costs nothing, and a curved start makes Newton crawl (16 × 16 fails at
         // a load factor of 1e-4)
         let mut x: Vec<Vec3> = sheet.rest().iter().map(|p| [p[0], 0.0, p[1] - l]).collect();
         let mut counts = super::sheet::SolveCounts::default();

@@ -8,6 +8,7 @@
 use super::sheet::{Sheet, SheetModel};
 use super::SceneError;
 use crate::assembly::ShellModel;
+use crate::shape::ShapeMesh;
 use crate::Vec3;
 use std::collections::HashMap;
 use std::fmt::Write;
@@ -20,6 +21,21 @@ pub struct SurfaceMesh {
     pub normals: Vec<Vec3>,
     pub uv: Vec<[f64; 2]>,
     pub quads: Vec<[usize; 4]>,
+}
+
+impl SurfaceMesh {
+    /// The sampled sheet as a triangulated shape (quads split along one diagonal).
+    pub fn to_shape(&self) -> ShapeMesh {
+        ShapeMesh {
+            positions: self.positions.clone(),
+            uv: Ok(self.uv.clone()),
+            triangles: self
+                .quads
+                .iter()
+                .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+                .collect(),
+        }
+    }
 }
 
 /// Samples the limit surface of `sheet` at control points `x`, `k` × `k` quads per cage face.

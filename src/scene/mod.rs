@@ -5,7 +5,7 @@
 //! the 1 m drape (`drape.rs`), the picture frame (`frame.rs`) and the corner pull
 //! (`corner.rs`), with the deformed surface's export (`export.rs`).
 //!
-//! Angles are measured from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
+//! Angles are taken from the weft: 0° is a weft strip, 90° a warp strip, 45° bias. The strip's
 //! axis is y; its weft direction is (sin θ, cos θ, 0) and its warp (cos θ, −sin θ, 0).
 
 mod cantilever;
@@ -19,11 +19,13 @@ pub mod roof;
 pub mod sheet;
 pub mod sphere;
 mod tensile;
+pub mod tri;
 
 pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMENT};
 pub use corner::{CornerPull, PullPoint};
 pub use drape::{Drape, DrapeShape};
 pub use frame::{Deformed, FramePoint, PictureFrame};
+pub use tri::{TriCantilever, TriTensile};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING, STRIP_ITERATIONS};
 
 use crate::assembly::{ModelError, ShellModel, YarnRule};

@@ -237,7 +237,7 @@ pub struct SolveCounts {
     pub factorizations: usize,
     pub backward_euler_steps: usize,
     pub saddle_escapes: usize,
-    /// Why backward Euler was used, over the kept solves.
+    /// Why backward Euler is used, over the kept solves.
     pub fallbacks: FallbackCounts,
     pub curvature_steps: usize,
     /// Steps on the convexified Hessian (after negative-curvature steps).

@@ -9,7 +9,7 @@
 //! The cage is the cube refined `levels` times with its control points projected onto the
 //! sphere (so the limit surface lies slightly inside it; that geometric error is O(h²)). The six
 //! face-centre points (the poles on the axes) may only move radially, which removes the rigid
-//! motions without disturbing the symmetric inflation. The measured stretch is
+//! motions without disturbing the symmetric inflation. The stretch is read as
 //! λ = (V / V₀)^(1/3) from the enclosed volumes.
 
 use super::{free_system, SceneError};

@@ -37,17 +37,17 @@ pub struct TensileStrip {
     pub yarn_ratio: Option<f64>,
 }
 
-/// The measured choice of strip cage grading (`--grading 0.8,0.8`): control lines crowded
-/// towards the jaws and the free edges, edge cells 1/9 of the middle ones. The corners where a jaw meets a free edge are singular, and a bias strip's force
-/// converges slowly there on uniform cages. Measured (`cargo run --release --example
-/// graded_strip`, example cotton, 50 × 75 mm at 45° pulled 3.75 mm, reference 5.90 N by
-/// Richardson): uniform 16×24 is 4.6 % off and converges at order 1.3 (32×48: 2.0 %); graded
-/// 16×24 is 1.0 % off and converges at order 2.1–2.4 (32×48: 0.3 %), at the same cost per solve.
-/// At 90° the 16×24 error drops from 2.5e-4 to 1.6e-5. The default of `fit --grading` and of
-/// `tensile` on its automatic mesh; `tensile --mesh`, `converge tensile` and `synth` stay
-/// uniform by default. The fit's bias stage used to stall on
-/// it (a noise-free degree-2 shear at 3.6 %): not the cages but the start of a raised degree,
-/// now space-mapped (`fit::surrogate`).
+/// The strip cage grading (`--grading 0.8,0.8`): control lines crowded towards the jaws and
+/// the free edges, edge cells 1/9 of the middle ones. The corners where a jaw meets a free edge
+/// are singular, and a bias strip's force converges slowly there on uniform cages
+/// (`cargo run --release --example graded_strip`, example cotton, 50 × 75 mm at 45° pulled
+/// 3.75 mm, reference 5.90 N by Richardson): uniform 16×24 is 4.6 % off and converges at
+/// order 1.3 (32×48: 2.0 %); graded 16×24 is 1.0 % off and converges at order 2.1–2.4
+/// (32×48: 0.3 %), at the same cost per solve. At 90° the 16×24 error drops from 2.5e-4 to
+/// 1.6e-5. The default of `fit --grading` and of `tensile` on its automatic mesh;
+/// `tensile --mesh`, `converge tensile` and `synth` stay uniform by default. A raised degree
+/// of the bias stage starts from a space-mapped point (`fit::surrogate`), which the graded
+/// cages need to keep the stage from stalling.
 pub const STRIP_GRADING: Grading = Grading {
     across: 0.8,
     along: 0.8,
@@ -190,21 +190,20 @@ impl TensileStrip {
 
 /// Newton iterations a strip's point may take in all (its cheap attempts, sub-steps and the
 /// whole budget of [`StripRig::solve_cold`]): thin off-axis strips wrinkle, and the
-/// backward-Euler fallback needs time to settle them. The fit has always run its strips with
-/// it; the solver's general default (60) left the virtual lab failing where the fit succeeds
-/// (measured: `ks-fit tensile --mesh 32x48 --to 7.5 --steps 5` on the bundled fitted cotton and
-/// silk at 22.5° and 67.5°, six of eight cases stopped at 4.5 or 6 mm with relative residuals
-/// of 9e-6–4e-4).
+/// backward-Euler fallback needs time to settle them. The fit and the virtual lab share it;
+/// the solver's general default (60) is too short here (`ks-fit tensile --mesh 32x48 --to 7.5
+/// --steps 5` on the bundled fitted cotton and silk at 22.5° and 67.5° stops at 4.5 or 6 mm in
+/// six of eight cases with it, at relative residuals of 9e-6–4e-4).
 pub const STRIP_ITERATIONS: usize = 500;
 
-/// Newton iterations a warm-started strip solve may take before it restarts cold.
+/// Newton iterations a warm-started strip solve may take; past them it restarts cold.
 const WARM_ITERATIONS: usize = 12;
 
 /// The largest move of any control-point coordinate a predictor may make, in gauge lengths.
 const MAX_PREDICTED_MOVE: f64 = 1.0;
 
 /// The last equilibrium of a run: elongation, positions, and ∂q/∂(elongation) there (`None`
-/// where it was unstable).
+/// where it is unstable).
 type Last = Option<(f64, Vec<Vec3>, Option<Vec<f64>>)>;
 
 /// An equilibrium with its solver report and linearisation.
@@ -238,12 +237,12 @@ pub struct StripRig {
     /// per point: the parameters (law, then thickness) of its equilibrium and ∂q/∂k there,
     /// which predict the equilibrium for new parameters (q + ∂q/∂k Δk)
     tangents: Vec<Option<ParameterTangent>>,
-    /// per point: up to [`warm::SECANTS`] equilibria before the stored one, newest first, with their
-    /// parameters (law, then thickness), for the secant predictor where no tangent is at hand
-    /// (see [`StripRig::warm_start`])
+    /// per point: up to [`warm::SECANTS`] equilibria preceding the stored one, newest first,
+    /// with their parameters (law, then thickness), for the secant predictor where no tangent
+    /// is at hand (see [`StripRig::warm_start`])
     earlier: Vec<Vec<(Vec<Vec3>, Vec<f64>)>>,
-    /// Newton iterations of attempts given up on since the last point was solved (a warm
-    /// start that did not converge, sub-steps): added to the point's report, so that counts
+    /// Newton iterations of attempts given up on since the last solved point (a warm
+    /// start that does not converge, sub-steps): added to the point's report, so that counts
     /// of iterations are of all the work done
     spent: usize,
     /// the factorisations of those attempts
@@ -313,23 +312,22 @@ impl StripRig {
         let mut out = Vec::with_capacity(self.elongations.len());
         // the last equilibrium: elongation, positions, and ∂q/∂(elongation) there
         let mut previous: Last = None;
-        // the equilibrium before `previous` (elongation, positions): the predictor's curvature
+        // the equilibrium preceding `previous` (elongation, positions): the predictor's curvature
         let mut before: Option<(f64, Vec<Vec3>)> = None;
-        // the last point did not start from a good warm start: this one's is measured
-        // against the predictor from the last equilibrium first
+        // the last point did not start from a good warm start: this one's is compared with
+        // the predictor from the last equilibrium first
         let mut doubt = false;
-        // a stored equilibrium of this run turned out a saddle for the new parameters (it
-        // was flat where the strip now wrinkles): the later points' stored ones are on the
-        // same lost branch, and the predictor from the wrinkled state just solved is taken
-        // instead (measured on the bundled cotton: such a warm start took 11–12 iterations,
-        // mostly escaping the saddle; the five fits 7843 → 7714 Newton iterations, every
-        // fitted value the same)
+        // a stored equilibrium of this run turned out a saddle for the new parameters (it is
+        // flat where the strip now wrinkles): the later points' stored ones are on the same
+        // lost branch, and the predictor from the wrinkled state just solved is taken in their
+        // place (on the bundled cotton such a warm start spends 11–12 iterations, mostly
+        // escaping the saddle)
         let mut lost_branch = false;
         for i in 0..self.elongations.len() {
             let started = std::time::Instant::now();
             let dl = self.elongations[i];
             let mut warm = self.warm_start(i);
-            // a point solved before: a fitter's trial caps its cold solve (`retry_iterations`)
+            // a point solved earlier: a fitter's trial caps its cold solve (`retry_iterations`)
             let stored = warm.is_some();
             warm = warm.filter(|_| !lost_branch);
             if doubt {
@@ -435,14 +433,14 @@ impl StripRig {
 
     /// The predictor at elongation `dl`: the last equilibrium moved along its tangent to the
     /// new jaw position (Euler continuation on the factorised tangent), plus, where the
-    /// equilibrium `before` it is known, the quadratic term of the path through the two
-    /// (x(e) = x₁ + (e − e₁) x₁′ + c (e − e₁)², c from x₀ at e₀: what Euler missed over the last
+    /// preceding equilibrium `before` is known, the quadratic term of the path through the two
+    /// (x(e) = x₁ + (e − e₁) x₁′ + c (e − e₁)², c from x₀ at e₀: what Euler misses over the last
     /// step, scaled by the square of the step ratio); or, where there is no tangent (the
     /// first point, an unstable equilibrium), stretched affinely.
     fn predict(&self, previous: &Last, before: Option<&(f64, Vec<Vec3>)>, dl: f64) -> Vec<Vec3> {
         // a tangent from a nearly singular Hessian (a strip at the edge of buckling) can move
-        // the cage by far more than the strip's size: such a start is worthless (measured: an
-        // energy of 1e241 J and forces that overflow), so the affine stretch replaces it
+        // the cage by far more than the strip's size: such a start is worthless (an energy of
+        // 1e241 J and forces that overflow), so the affine stretch replaces it
         let sane = |slope: &[f64], h: f64| {
             slope
                 .iter()
@@ -485,8 +483,8 @@ impl StripRig {
 
     /// A point that failed, with the Newton iterations of all its attempts (warm start, cheap
     /// attempts, sub-steps, the whole budget) in place of the last attempt's alone, which
-    /// understated the work: a strip that had spent its 60 said "did not converge in 20".
-    /// The attempts stay counted in `spent`, for the next point solved (a fitter's counts).
+    /// would understate the work (a strip that has spent its 60 would say "did not converge in
+    /// 20"). The attempts stay counted in `spent`, for the next point solved (a fitter's counts).
     fn point_failure(&self, e: SceneError) -> SceneError {
         let total = self.spent;
         match e {

@@ -15,7 +15,6 @@
 
 pub mod distance;
 pub mod fft;
-pub mod target;
 
 use crate::Vec3;
 
@@ -188,19 +187,6 @@ impl ShapeMesh {
             }
         }
         s
-    }
-
-    /// From a sampled sheet (quads split along one diagonal).
-    pub fn from_surface(s: &crate::scene::export::SurfaceMesh) -> Self {
-        Self {
-            positions: s.positions.clone(),
-            uv: Ok(s.uv.clone()),
-            triangles: s
-                .quads
-                .iter()
-                .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-                .collect(),
-        }
     }
 
     /// The square root of the smallest eigenvalue of the vertices' covariance: how far the

@@ -9,8 +9,7 @@
 use super::linearization::hessian_times;
 use super::newton::{balance, uniform};
 use super::{FreeSystem, NewtonOptions};
-use crate::assembly::Want;
-use crate::model::ClothModel;
+use crate::model::{ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -42,7 +41,7 @@ const SOFT_STEPS: usize = 2;
 const CERTIFICATE_RADIUS: f64 = 0.3;
 
 /// The last step of a converging Newton solve, taken whole on the factorisation that computed
-/// it and checked by one gradient assembly instead of a further Hessian assembly and
+/// it and checked by one gradient assembly, without a further Hessian assembly and
 /// factorisation: from a relative residual r ≤ √rtol a Newton step leaves about r² (quadratic
 /// convergence), so the equilibrium usually needs no new tangent. From a larger r (up to
 /// `chord_from`) the step leaves about r², and up to [`CHORD_STEPS`] chord steps on the same
@@ -51,13 +50,13 @@ const CERTIFICATE_RADIUS: f64 = 0.3;
 ///
 /// Where the steps land within `rtol` (or the round-off floor, measured with the diagonal of
 /// the tangent it came from), `x` moves there and what it found there comes back; the caller
-/// keeps the tangent at the point before as the linearisation (marked stale). That tangent
-/// was positive definite; from beyond √rtol the solution's own is then certified
+/// keeps the tangent at the preceding point as the linearisation (marked stale). That tangent
+/// is positive definite; from beyond √rtol the solution's own is then certified
 /// ([`certified`]): a flat strip chorded onto the saddle where it would wrinkle is not
 /// reported stable. Where the certificate fails, or the steps do not reach `rtol` but the
 /// best point reached is lower in energy and residual than `x`, `x` moves there and the
 /// Newton iteration goes on from it (assembling and factorising the tangent there, which
-/// finds a saddle if there is one); else `x` is left as it was.
+/// finds a saddle if there is one); else `x` stays where it is.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn polish(
     model: &dyn ClothModel,
@@ -202,7 +201,7 @@ pub(super) enum Polish {
     /// not within rtol or not certified, but `x` moved to a point lower in energy and
     /// residual (or to the uncertified equilibrium)
     Moved { energy: f64, chord_steps: usize },
-    /// `x` left as it was
+    /// `x` unchanged
     Missed { chord_steps: usize },
 }
 

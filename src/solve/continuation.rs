@@ -22,13 +22,13 @@ pub struct ContinuationReport {
 /// With [`Strategy::FullStep`], each load step of the ramp that follows a failed whole-load
 /// attempt also takes its first this-many Newton steps whole: from the flat strip the Newton
 /// step has no in-plane contraction, its membrane energy dwarfs its bending energy, and the
-/// line search cut it to 1/16 and crawled even at 1e-4 of the load (cotton strips of 400 mm at
-/// 0° and 200 mm at 45° failed; with 5 they solve, and the 200 mm strip at 0° takes 430
-/// iterations instead of 668).
+/// line search cuts it to 1/16 and crawls even at 1e-4 of the load (cotton strips of 400 mm
+/// at 0° and 200 mm at 45° fail without whole steps; with 5 they solve, and the 200 mm strip
+/// at 0° takes 430 iterations where it takes 668 without).
 pub const RAMP_FULL_STEPS: usize = 5;
 
 /// Target of [`Strategy::Adaptive`]: the corrector's move as a fraction of the load increment's.
-/// On the heavy D1388 cantilever (4×16, 4×32) 0.1 took 139 and 109 iterations, 0.3 111 and 88,
+/// On the heavy D1388 cantilever (4×16, 4×32) 0.1 takes 139 and 109 iterations, 0.3 111 and 88,
 /// 1 100 and 75 but with 25-iteration corrector solves near the budget; 0.3 keeps them short.
 pub const ADAPTIVE_TOL: f64 = 0.3;
 

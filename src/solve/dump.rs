@@ -8,8 +8,7 @@
 //! --example stability_atlas`): one sub-folder `failed-<pid>-<k>` per failure.
 
 use super::{FreeSystem, SolveError};
-use crate::assembly::{BlockMatrix, Want};
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
 use nalgebra_sparse::io::save_to_matrix_market_str;
 use nalgebra_sparse::CooMatrix;

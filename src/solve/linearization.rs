@@ -2,8 +2,7 @@
 //! sensitivity system of Clyde et al. 2017, Eq. 6).
 
 use super::{refine, FreeSystem, Precision, SolveError};
-use crate::assembly::{BlockMatrix, Want};
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -15,8 +14,8 @@ use faer::MatMut;
 pub struct Linearization {
     pub hessian: BlockMatrix,
     /// ∂E/∂x over every DOF (free and clamped) at the solution: its reactions. Where the
-    /// solve's last step was polished ([`super::NewtonOptions::polish`]) this is the polished
-    /// point's, while the Hessian is the point's before it.
+    /// solve's last step is polished ([`super::NewtonOptions::polish`]) this is the polished
+    /// point's, while the Hessian is the preceding point's.
     pub gradient: Vec<Vec3>,
     pub(super) values: Vec<f64>,
     pub(super) llt: Llt<usize, f64>,
@@ -67,7 +66,7 @@ impl Linearization {
     /// ended on a saddle, or on the singular tangent of a wrinkling bifurcation) factorises
     /// K + σ D instead, D = diag K and σ = 1e-10, 1e-8, … 1e-4, the first that succeeds:
     /// sensitivities of a regularised tangent, for a minimiser's search direction only.
-    /// Returns the linearization and σ (0 when none was needed).
+    /// Returns the linearization and σ (0 when none is needed).
     pub fn new_regularized(
         model: &dyn ClothModel,
         system: &FreeSystem,
@@ -158,9 +157,9 @@ impl Linearization {
     /// Whether the tangent is far enough from the solution's for
     /// [`Linearization::solve_at_solution`] to refine on it: from a relative residual of
     /// [`REFINE_FROM`] (a tangent that stale leaves sensitivities off by about its staleness:
-    /// measured on the bundled cotton's fit against fresh tangents, up to 1e-5 from polished
-    /// steps under 1e-4, 1e-3–1e-2 from chords under 5e-2; `tests/sensitivities.rs` asks for
-    /// 1e-5 and saw 2.4e-5 from a tangent under 1e-4 stale).
+    /// on the bundled cotton's fit, against fresh tangents, up to 1e-5 from polished steps
+    /// under 1e-4, 1e-3–1e-2 from chords under 5e-2; `tests/sensitivities.rs` asks for 1e-5,
+    /// which a tangent under 1e-4 stale can miss at 2.4e-5).
     pub fn refines(&self) -> bool {
         self.stale > REFINE_FROM
     }
@@ -215,7 +214,7 @@ pub const REFINE_FROM: f64 = 1e-6;
 pub const ADJOINT_REFINEMENTS: usize = 8;
 
 /// H(x) v over every DOF, by a forward difference of the gradient `grad` at `x` (one gradient
-/// assembly: an eighth of a Hessian assembly on the shell, measured by `cargo bench --bench
+/// assembly: an eighth of a Hessian assembly on the shell, by `cargo bench --bench
 /// shell`). The step is √ε of the body's size along v, so the product is good to about √ε
 /// relative.
 pub(super) fn hessian_times(

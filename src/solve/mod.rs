@@ -85,8 +85,8 @@ pub struct NewtonOptions {
     pub full_steps: usize,
     /// A Newton step from a relative residual under √rtol is taken whole and checked by a
     /// gradient assembly, without a further Hessian assembly and factorisation where it lands
-    /// within `rtol` (the tangent of the point before is kept as the linearisation). The
-    /// line-search strategies only; the trust region confirms its last step as before.
+    /// within `rtol` (the tangent of the preceding point is kept as the linearisation). The
+    /// line-search strategies only; the trust region assembles at its last point as at any other.
     pub polish: bool,
     /// Relative residual under which a polished Newton step may be finished by chord steps on
     /// its own factorisation (see `newton::polish`); the linearisation handed back is then the
@@ -108,8 +108,8 @@ pub enum Strategy {
     /// iterations, kept only if it converges to a stable equilibrium), then the ramp from the
     /// start if it did not, each load step's first `continuation::RAMP_FULL_STEPS` Newton steps
     /// taken whole. The default: of ten cantilevers of the example material (20–400 mm, 0° and
-    /// 45°) it solves nine and the ramp seven; on those seven it took 952 Newton iterations
-    /// where the ramp took 1666 (heavy D1388 cantilever at 4×16: 15 against 108), drape angles
+    /// 45°) it solves nine and the ramp seven; on those seven it takes 952 Newton iterations
+    /// where the ramp takes 1666 (heavy D1388 cantilever at 4×16: 15 against 108), drape angles
     /// equal to 1e-9.
     #[default]
     FullStep,
@@ -188,12 +188,12 @@ impl NewtonOptions {
     }
 }
 
-/// Why backward Euler was used.
+/// Why backward Euler is used.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FallbackCounts {
     /// The Cholesky factorisation met a non-positive pivot (the Hessian is not positive definite).
     pub indefinite: usize,
-    /// The Newton step was not a descent direction, or the line search found no decrease.
+    /// The Newton step is not a descent direction, or the line search finds no decrease.
     pub ascent: usize,
     /// Three consecutive Newton steps lowered the energy by ≤ 0.1 % in all without the residual
     /// falling tenfold.
@@ -210,7 +210,7 @@ pub struct SolveReport {
     pub energy: f64,
     /// ‖g_free‖ / force scale at the end.
     pub residual: f64,
-    /// ‖g_free‖ / force scale at the start (`None` before the first assembly).
+    /// ‖g_free‖ / force scale at the start (`None` until the first assembly).
     pub initial_residual: Option<f64>,
     pub factorizations: usize,
     /// Backward-Euler steps taken, and why the solver turned to them.
@@ -239,7 +239,7 @@ pub struct SolveReport {
     pub stable: bool,
     /// Times an unstable equilibrium (a saddle) was perturbed and the solve continued.
     pub saddle_escapes: usize,
-    /// The last Newton step was taken on the factorisation before it and checked by a
+    /// The last Newton step is taken on the preceding point's factorisation and checked by a
     /// gradient assembly (see [`NewtonOptions::polish`]): the linearisation is that point's.
     pub polished: bool,
     /// Such last steps that missed `rtol` (each one gradient assembly spent; the solve went on).
@@ -256,10 +256,10 @@ pub(crate) fn norm(v: &[f64]) -> f64 {
 /// Makes every sparse factorisation sequential (faer's own parallelism off), so that a result
 /// does not depend on the number of threads: faer's supernodal Cholesky splits its dense
 /// updates by the rayon pool's size, and on the 32 × 48 strips a fit refines to, one thread and
-/// two gave fitted parameters differing in the 13th digit (`ks-fit batch --jobs 2` runs each fit
-/// on one thread). The fit's independent solves run side by side instead, and on 2 cores
-/// `Par::rayon(2)` was slower than sequential factorisation anyway (measured on an n = 30k
-/// shell-like system). `ks-fit` calls this first; a library user who wants the same should too.
+/// two give fitted parameters differing in the 13th digit (`ks-fit batch --jobs 2` runs each
+/// fit on one thread). The fit's independent solves run side by side instead, and on 2 cores
+/// `Par::rayon(2)` is slower than sequential factorisation anyway (on an n = 30k shell-like
+/// system). `ks-fit` calls this first; a library user who wants the same should too.
 pub fn deterministic_factorizations() {
     faer::set_global_parallelism(faer::Par::Seq);
 }

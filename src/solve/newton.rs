@@ -5,8 +5,7 @@ use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL, STEP_FORCING,
 };
-use crate::assembly::{BlockMatrix, Want};
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::sparse::linalg::solvers::Llt;
@@ -124,8 +123,9 @@ pub(super) fn line_search(
     let mut gf = vec![0.0; nf];
     let mut d = vec![0.0; nf];
     let mut mode = Mode::Newton;
-    // the convexified Hessian (allocated on first use) and its entries, and whether the last fallback step was along negative
-    // curvature (the next one is then a step on the convexified Hessian)
+    // the convexified Hessian (allocated on first use) and its entries, and whether the last
+    // fallback step was along negative curvature (the next one is then a step on the
+    // convexified Hessian)
     let mut phess: Option<BlockMatrix> = None;
     let mut pvalues = Vec::new();
     let mut after_curvature = false;
@@ -154,7 +154,7 @@ pub(super) fn line_search(
             (&external, external_scale),
             &mut report,
         )?;
-        // the floor estimate can miss: an off-axis strip at 0.03 % strain stalled at 8.6e-9
+        // the floor estimate can miss: an off-axis strip at 0.03 % strain stalls at 8.6e-9
         // (its strains are differences of O(1) metrics, good to ε/strain). A Newton step that
         // does not halve a residual already under STALL_RTOL, or one the line search cannot
         // use there, means Newton is at the floor: forces good to 1e-6 are far inside any
@@ -291,7 +291,7 @@ pub(super) fn line_search(
         // chords from beyond √rtol only where Newton is converging: the solve's first step (a
         // warm start or a predictor), or after a step that cut the residual tenfold; a state
         // crawling through a wrinkle pattern would spend gradient assemblies on chords that
-        // miss at every step (measured: the ratio-2e4 fit 110 → 142 s with chords everywhere)
+        // miss at every step (chords everywhere make the ratio-2e4 fit about 30 % slower)
         let converging = it == 0 || history.last().is_some_and(|&(_, r)| gnorm <= 0.1 * r);
         let reach = if converging {
             super::chord::polish_from(opts)
@@ -484,7 +484,7 @@ pub(super) fn perturb(system: &FreeSystem, x: &mut [Vec3], seed: &mut u64) {
 /// leaves the saddle, and a step on this tangent, which keeps every stiffness that is positive,
 /// then moves the whole state down at once, where backward Euler (H + μM) damps every soft mode
 /// alike. Alone, without the curvature steps, it cannot leave a symmetric saddle (its gradient
-/// has no component along the buckling mode) and was measured to stall there.
+/// has no component along the buckling mode) and stalls there.
 fn convexified_factor(
     model: &dyn ClothModel,
     system: &FreeSystem,
@@ -617,7 +617,7 @@ pub(super) fn balance(
 ) -> Balance {
     system.reduce(grad, gf);
     // the round-off floor of the force evaluation: positions are known to ε‖x‖∞, so forces
-    // to about ε‖diag K‖‖x‖∞ (measured: residuals stall at 0.15–0.3 of this)
+    // to about ε‖diag K‖‖x‖∞ (residuals stall at 0.15–0.3 of this)
     let diag_norm = system
         .diag
         .iter()

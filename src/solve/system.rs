@@ -3,8 +3,7 @@
 //! set and reused by every numeric factorisation.
 
 use super::{refine, SolveError};
-use crate::assembly::BlockMatrix;
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel};
 use crate::Vec3;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};

@@ -17,8 +17,7 @@ use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL, STEP_FORCING,
 };
-use crate::assembly::BlockMatrix;
-use crate::model::ClothModel;
+use crate::model::{BlockMatrix, ClothModel};
 use crate::Vec3;
 use faer::prelude::Solve;
 use faer::MatMut;

@@ -6,7 +6,8 @@
 use crate::material::FabricMaterial;
 use crate::scene::{CantileverBend, SceneError, TensileStrip};
 use crate::tri::file::{TriSource, SPRING_CURVATURE};
-use crate::tri::{TriCantilever, TriKind, TriTensile};
+use crate::scene::{TriCantilever, TriTensile};
+use crate::tri::TriKind;
 
 /// A model of the fabric the virtual lab runs.
 #[derive(Clone, Debug)]

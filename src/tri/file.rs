@@ -24,6 +24,7 @@
 
 use super::curve::Stiffness;
 use super::params::{TriKind, TriMaterial, COMPONENTS};
+pub use crate::material::file::model_only;
 use crate::material::file::{line_of_key, parse_material};
 use crate::material::{FabricMaterial, MaterialFileError};
 
@@ -49,16 +50,6 @@ impl TriSource {
 /// Curvature (1/m) at which the springs' bending energy is matched to the plate's when a
 /// shell material is converted (a 1 cm radius: a cantilever's or a fold's).
 pub const SPRING_CURVATURE: f64 = 100.0;
-
-/// The model kind of a file that has a `[model]` table and no shell law, if it is one.
-pub fn model_only(text: &str) -> Option<String> {
-    let v: toml::Value = toml::from_str(text).ok()?;
-    let t = v.as_table()?;
-    if t.contains_key("a11_pa") {
-        return None;
-    }
-    Some(t.get("model")?.get("kind")?.as_str()?.to_string())
-}
 
 /// Key suffix of component `c` of `kind`.
 fn unit(kind: TriKind, c: usize) -> &'static str {

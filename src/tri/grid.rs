@@ -147,7 +147,7 @@ impl TriGrid {
 
     /// Springs between nodes (i, j) and (i + di, j + dj); `area` is what each spring stands
     /// for: the cell area times `per_cell`, halved for springs along the boundary (they border
-    /// one row of cells instead of two).
+    /// one row of cells rather than two).
     fn springs(&self, di: isize, dj: isize, per_cell: f64) -> Vec<Spring> {
         let (nx, ny) = (self.nx as isize, self.ny as isize);
         let cell = self.length * self.width / (self.nx * self.ny) as f64;

@@ -7,16 +7,13 @@
 
 pub mod curve;
 pub mod file;
-pub mod fit;
 pub mod grid;
 pub mod jet;
 pub mod model;
 pub mod params;
-pub mod scenes;
 pub mod xpbd;
 
 pub use curve::Stiffness;
 pub use grid::TriGrid;
 pub use model::TriModel;
 pub use params::{TriKind, TriMaterial, ZeroStrain};
-pub use scenes::{TriCantilever, TriTensile};

@@ -20,9 +20,8 @@
 use super::grid::{EdgeKind, TriGrid};
 use super::jet::{cross, dot, point, pull_back, sub, vector, Jet};
 use super::params::{TriKind, TriMaterial};
-use crate::assembly::{BlockMatrix, BlockPattern, Want};
+use crate::model::{BlockMatrix, BlockPattern, ClothModel, Want};
 use crate::material::OutOfDomain;
-use crate::model::ClothModel;
 use crate::Vec3;
 use std::sync::Arc;
 

@@ -13,8 +13,7 @@
 
 use super::model::TriModel;
 use super::params::TriKind;
-use crate::assembly::Want;
-use crate::model::ClothModel;
+use crate::model::{ClothModel, Want};
 use crate::Vec3;
 use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;

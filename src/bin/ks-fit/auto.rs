@@ -15,7 +15,7 @@ pub const BEND_TOL_DEG: f64 = 0.05;
 pub const TENSILE_TOL: f64 = 0.003;
 /// Most meshes of the strip ladder (4, 8, 16, 32, 64 faces across for a 50 × 75 mm strip).
 pub const TENSILE_LEVELS: usize = 5;
-/// The strip ladder stops growing before a mesh of more faces than this.
+/// The strip ladder stops short of a mesh of more faces than this.
 pub const TENSILE_MAX_FACES: usize = 20_000;
 
 /// `--tol` for `bend`: a positive number of degrees.
@@ -155,7 +155,7 @@ pub fn auto_tensile(
 /// A strip's curve (`run` on a mesh) on a growing ladder of meshes from [`tensile_base`],
 /// each twice as fine as the last, stopping as soon as one mesh's estimated relative force
 /// error ([`kshell::converge::curve_errors`]) is below `--tol`, after [`TENSILE_LEVELS`]
-/// meshes, or before one of over [`TENSILE_MAX_FACES`] faces; the choice is said on stderr
+/// meshes, or short of one of over [`TENSILE_MAX_FACES`] faces; the choice is said on stderr
 /// (`label` names the cages). Returns the chosen mesh's points.
 pub fn auto_ladder(
     (width, length): (f64, f64),

@@ -4,7 +4,7 @@
 use crate::guard::Guard;
 use kshell::io::{cell, num};
 use kshell::material::load_material;
-use kshell::shape::target::{ShapeFit, ShapeTarget};
+use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
 
 /// Highest degree of an η the fit accepts (each degree adds two parameters per direction).
@@ -167,7 +167,7 @@ pub fn cmd_fit(
             dir.display()
         ));
     }
-    // the degree choice was shown as progress; print it here only when progress was off
+    // the degree choice is shown as progress; print it here only when progress is off
     let shown = if quiet { &result.degree_log[..] } else { &[] };
     for line in shown.iter().chain(&result.notes) {
         println!("{line}");

@@ -55,7 +55,7 @@ enum Command {
         /// Boundary treatment: `phantom` (extrapolated rows) or `ghost` (ghost control points).
         #[arg(long, default_value = "phantom")]
         boundary: BoundaryRule,
-        /// Apply N uniform Catmull–Clark steps before anything else.
+        /// Apply N uniform Catmull–Clark steps first, ahead of anything else.
         #[arg(long, default_value_t = 0)]
         subdivide: usize,
         /// Write the (possibly refined) mesh to this OBJ file.
@@ -164,7 +164,7 @@ enum Command {
     /// and status in OUT/<fabric>/, summary.csv and index.html in OUT, rewritten as fabrics
     /// finish; resumable (a fabric done with unchanged inputs is skipped); side by side with
     /// --jobs, or as a Slurm job array (--slurm, --task, --collect). Exit 3 when a fabric
-    /// failed, failed its fit (--max-error) or was not run.
+    /// fails, fails its fit (--max-error) or is not run.
     Batch(batch::BatchArgs),
     /// Fit a fabric dataset: writes the fitted material (TOML, with a [fit] table of how well
     /// it reproduces every test) and prints the per-test table; progress on stderr.
@@ -189,7 +189,7 @@ enum Command {
         /// Highest polynomial degree of each η tried (lowest first), 1 to 8.
         #[arg(long, default_value_t = 3)]
         max_degree: usize,
-        /// Use exactly this degree for every η instead of choosing (for comparisons). Each
+        /// Use exactly this degree for every η rather than choosing (for comparisons). Each
         /// raised degree is fitted whatever its start finds; a law that comes out implausible
         /// (its stress stops rising in the tested range) or with a term too small to matter
         /// keeps the degree below, and the log says so.
@@ -201,7 +201,7 @@ enum Command {
         /// and no curve by 0.3 % (the mesh check's rule); other levels are skipped when they
         /// change the last fit's forces by under 1 %. A stage the refinement leaves unchanged
         /// (under 0.1 %) is not refitted. The default stops at 16x24, where the mesh check
-        /// measured about 1 % on graded cages; add 32x48 for a fit that meets the 1 % rule
+        /// finds about 1 % on graded cages; add 32x48 for a fit that meets the 1 % rule
         /// everywhere, at about twice the time.
         #[arg(long, default_value = "8x12,16x24")]
         mesh_ladder: String,
@@ -255,26 +255,26 @@ enum Command {
         /// change the fit): `coarse` (one solve of every fitted test on the mesh half as fine,
         /// carried to the finer one at order 2 on graded cages, 1.2 on uniform ones, 0.8 with the
         /// yarn terms on the face centres), `fine`
-        /// (solved on the mesh twice as fine: measured, several times the cost) or `off`.
-        /// Where the ladder stopped because the next level was solved and not needed, that
-        /// measured check is reported instead (in either mode but `off`).
+        /// (solved on the mesh twice as fine, at several times the cost) or `off`.
+        /// Where the ladder stops because the next level is solved and not needed, that
+        /// solved check is reported in its place (in either mode but `off`).
         #[arg(long, value_enum, default_value = "coarse")]
         mesh_check: kshell::fit::MeshCheckMode,
         /// Strip cage grading towards the free edges and the jaws, "across,along", each in
         /// [0, 1) (0: uniform; see `synth --grading`). The default crowds the cage at the
         /// clamped corners, where a bias strip's force converges slowly: 4–6 times more
-        /// accurate on the same mesh, at order 2 instead of 1.2.
+        /// accurate on the same mesh, at order 2 where uniform cages converge at 1.2.
         #[arg(long, value_parser = parse_grading, default_value = "0.8,0.8")]
         grading: kshell::mesh::Grading,
         /// Each test's mesh: `strict` (after the ladder, every strip whose estimated mesh error
         /// is above a third of its fit error and 0.3 % is refined, faces doubled across and
-        /// along, at most three times and to 4096 faces, and its stage refitted; so is a
+        /// along, at most three times and to 6144 faces, and its stage refitted; so is a
         /// stage's strip with the largest estimated mesh error where the mesh check would move
         /// the stage by 1 % or more, the strip of a fitted curve that the check moves by 0.3 %
         /// or more, and the bends where it would move a thickness or rigidity by 1 % or a
         /// drape angle by 0.1°), `own` (as `strict` but a curve moving by 0.3 % alone is
-        /// reported, not refined: faster where such a strip wrinkles, the cost measured in the
-        /// README) or `ladder` (every strip on the ladder's last level). `[[fit.test]]` mesh
+        /// reported, not refined: faster where such a strip wrinkles; the README compares the
+        /// two) or `ladder` (every strip on the ladder's last level). `[[fit.test]]` mesh
         /// names each test's real mesh.
         #[arg(long, value_enum, default_value = "strict")]
         test_meshes: kshell::fit::TestMeshes,

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 fn refine(mesh: &PolyMesh) -> PolyMesh {
-    // the mesh was checked when it was read; refinement keeps it manifold
+    // the mesh is checked when it is read; refinement keeps it manifold
     match Topology::build(mesh) {
         Ok(t) => refine_uniform(mesh, &t),
         Err(_) => mesh.clone(),

@@ -5,7 +5,8 @@
 use crate::auto::auto_bend;
 use crate::scene::{describe, unstable_error, SceneArgs};
 use kshell::tri::file::{load_tri, TriSource};
-use kshell::tri::{TriCantilever, TriKind, TriTensile};
+use kshell::scene::{TriCantilever, TriTensile};
+use kshell::tri::TriKind;
 use std::path::Path;
 
 /// Reads the parameters, saying where they come from.
@@ -117,7 +118,7 @@ pub fn bend(
 /// `ks-fit fit DATA --model M` for a triangle model: writes the `[model]` table and a `[fit]`
 /// table of how well it reproduces every test, prints the per-test table; a fitted test that
 /// does not solve, or whose error exceeds `max_error` (fraction; see
-/// `kshell::tri::fit::verdict`), fails the fit (`Ok(false)`: exit 3).
+/// `kshell::fit::tri::verdict`), fails the fit (`Ok(false)`: exit 3).
 pub fn fit(
     file: &Path,
     output: Option<&Path>,
@@ -127,7 +128,7 @@ pub fn fit(
     allow_outside: bool,
     max_error: f64,
 ) -> Result<bool, String> {
-    use kshell::tri::fit::{fit_tri, TriFitOptions};
+    use kshell::fit::tri::{fit_tri, TriFitOptions};
     use std::fmt::Write;
     let kind: TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
     let (data, warnings) =
@@ -266,7 +267,7 @@ pub fn fit(
         );
         return Ok(false);
     }
-    let over = kshell::tri::fit::verdict::over(&r.tests, max_error);
+    let over = kshell::fit::tri::verdict::over(&r.tests, max_error);
     if !over.is_empty() {
         println!(
             "FIT FAILED: fitted tests above --max-error {:.1} %: {} (repeats are judged after their own force scale)",
@@ -280,7 +281,7 @@ pub fn fit(
 
 /// The keys of one shape's `[[fit.test]]` entry after `kind` and `obj` (`nan` where the scene
 /// did not solve).
-pub fn shape_keys(s: &kshell::shape::target::ShapeFit) -> String {
+pub fn shape_keys(s: &kshell::fit::shape_target::ShapeFit) -> String {
     let num = |v: f64, digits: usize| {
         if v.is_finite() {
             format!("{v:.digits$}")
@@ -304,7 +305,7 @@ pub fn shape_keys(s: &kshell::shape::target::ShapeFit) -> String {
     text
 }
 
-fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
+fn print_shapes(tests: &[kshell::fit::tri::TestFit]) {
     let rows: Vec<_> = tests
         .iter()
         .filter_map(|t| t.shape.as_ref().map(|s| (s, t.mesh.0, t.fitted)))
@@ -314,7 +315,7 @@ fn print_shapes(tests: &[kshell::tri::fit::TestFit]) {
 
 /// The shapes' table: scene, descriptor, rms distance, the descriptor's relative error, force,
 /// mesh (faces each way), fitted.
-pub fn print_shape_rows(rows: &[(&kshell::shape::target::ShapeFit, usize, bool)]) {
+pub fn print_shape_rows(rows: &[(&kshell::fit::shape_target::ShapeFit, usize, bool)]) {
     if rows.is_empty() {
         return;
     }

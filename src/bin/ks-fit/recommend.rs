@@ -1,10 +1,10 @@
 //! `ks-fit recommend`: the cheapest cloth model and mesh whose error in one lab test is below a
-//! tolerance, with the table it chose from (`kshell::model::compare`).
+//! tolerance, with the table it chose from (`kshell::recommend`).
 
 use crate::scene::mm;
 use kshell::converge::{check_ladder, parse_ladder};
 use kshell::material::load_material;
-use kshell::model::compare::{compare_on, LabTest};
+use kshell::recommend::{compare_on, LabTest};
 use kshell::tri::file::{model_only, parse_tri, TriSource};
 use kshell::tri::ZeroStrain;
 use std::path::PathBuf;
@@ -50,7 +50,7 @@ pub struct RecommendArgs {
     #[arg(long)]
     overhang: Option<f64>,
     /// Material files with a fitted triangle model's [model] table (from `ks-fit fit --model`),
-    /// used for their models instead of converting the shell's moduli.
+    /// used for their models rather than converting the shell's moduli.
     #[arg(long, num_args = 1..)]
     fits: Vec<PathBuf>,
     /// Runs per model and mesh (the median time is kept; default 3, and 1 for the drape,

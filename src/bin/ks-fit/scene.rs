@@ -19,7 +19,7 @@ pub struct SceneArgs {
     #[arg(long, value_parser = parse_mesh)]
     pub mesh: Option<(usize, usize)>,
     /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
-    /// ghost for cantilevers, as measured in the README).
+    /// ghost for cantilevers, the better of the two for each in the README's comparison).
     #[arg(long)]
     pub boundary: Option<BoundaryRule>,
     /// Strip cage grading towards the free edges and the jaws, "across,along", each in [0, 1)

@@ -208,7 +208,7 @@ fn run_kind(
     strategy: kshell::solve::Strategy,
 ) -> Result<Run, SceneError> {
     // wrinkling and folding sheets spend long stretches in backward-Euler relaxation: a
-    // budget of 60 iterations per solve failed a 10 % corner pull on 20 × 20
+    // budget of 60 iterations per solve fails a 10 % corner pull on 20 × 20
     let solver = NewtonOptions {
         max_iterations: SCENE_ITERATIONS,
         strategy,

@@ -1,54 +1,45 @@
 //! A cold strip point's attempts (Dirichlet increments): the predictor with a short budget,
 //! sub-steps where that fails, and the whole budget last, resumed where the first attempt
-//! stopped; a first attempt that was settling goes on without the sub-steps.
+//! stopped; a first attempt that is still settling goes on without the sub-steps.
 
 use super::{Equilibrium, Last, SceneError, Solved, StripRig};
 use crate::solve::SolveError;
 use crate::Vec3;
 
-/// Newton iterations the first cold solve of a point may take before its step is cut into
+/// Newton iterations the first cold solve of a point may take; past them its step is cut into
 /// sub-steps (the whole budget comes last; see [`StripRig::solve_cold`]).
 const FIRST_TRY_ITERATIONS: usize = 40;
 
 /// How many times a first attempt must have cut its start's relative residual to go on with
-/// the whole budget instead of sub-steps.
+/// the whole budget rather than with sub-steps.
 const SETTLING: f64 = 10.0;
 
 impl StripRig {
     /// The equilibrium at `dl` from the predictor (Euler or quadratic, whichever starts at the
     /// lower energy). Outside a fitter's trial (`retry_iterations` unset) the cheap attempts
     /// come first, each held to [`FIRST_TRY_ITERATIONS`]: the predictor, then the step from
-    /// the last equilibrium cut into 2, 4 and 8 equal sub-steps, each predicted from the one
-    /// before. Where they all fail, the whole budget (`max_iterations`: the backward-Euler
-    /// fallback's time to settle a wrinkling strip) goes to the predictor, then to the other
-    /// predictor, then to the sub-steps. A large step into a wrinkling strip can land where
-    /// Newton stagnates (measured: cotton at 45° on a graded 8 × 12 cage, 4 → 6 mm in one
-    /// step, relative residual stuck at 1; two sub-steps solve it); stiff yarns over a soft
-    /// shear at 22.5° crawl by backward Euler from a one-step start that two sub-steps solve
-    /// in five Newton iterations each (measured: the yarn-to-shear ratio 1000 strip, 16 × 24,
-    /// 6 → 7.5 mm: 60 iterations of crawl first, when the budget was spent before the
-    /// sub-steps); and at a yarn-to-shear ratio of 2e4 the 67.5° strip on 32 × 48 settles
-    /// within the budget from the quadratic start where it does not from Euler's, whose
-    /// energy was 1 % lower (5.625 mm: relative residual 7.7e-4 after 500 iterations).
-    /// A first attempt that cut its start's residual tenfold or more before its 40 iterations
-    /// ran out ([`StripRig::settling`]) goes straight on with the whole budget, without the
-    /// cheap sub-steps: it is a wrinkle pattern settling, which a half-step only starts again
-    /// (measured: the ratio-2e4 strip at 67.5° on 32 × 48, 5 points to 7.5 mm: the last three
-    /// points 96/95/109 → 56/55/69 iterations, every force the same to the 16 digits printed;
-    /// traced at 4.5 mm, the first attempt had cut its residual from 1 to 0.04 when its 40 ran
-    /// out, the half-step then failed after 38 more, and the resumed attempt converged in 30;
-    /// the ratio-2e4 fit of `paper_repro/stiff_fit` 3237 → 2040 iterations, every fitted value
-    /// the same to the bit).
+    /// the last equilibrium cut into 2, 4 and 8 equal sub-steps, each predicted from the
+    /// previous one. Where they all fail, the whole budget (`max_iterations`: the
+    /// backward-Euler fallback's time to settle a wrinkling strip) goes to the predictor, then
+    /// to the other predictor, then to the sub-steps. A large step into a wrinkling strip can
+    /// land where Newton stagnates (cotton at 45° on a graded 8 × 12 cage, 4 to 6 mm in one
+    /// step, leaves the relative residual at 1; two sub-steps solve it); stiff yarns over a soft
+    /// shear at 22.5° crawl by backward Euler from a one-step start that two sub-steps solve in
+    /// five Newton iterations each, so the sub-steps come ahead of the whole budget; and at a
+    /// yarn-to-shear ratio of 2e4 the 67.5° strip on 32 × 48 settles within the budget from
+    /// the quadratic start but not from Euler's, even where Euler's starts 1 % lower in energy.
+    /// A first attempt that cuts its start's residual tenfold or more within its 40 iterations
+    /// ([`StripRig::settling`]) goes straight on with the whole budget, without the cheap
+    /// sub-steps: it is a wrinkle pattern settling, which a half-step only starts again (on
+    /// the ratio-2e4 strips this saves over a third of the iterations, with every force
+    /// and fitted value the same; see `paper_repro/stiff_fit`).
     /// Where the first half-step fails too, the cheap phase ends there: what is hard is then
     /// the state (a wrinkle pattern reorganising over hundreds of iterations), not the step,
-    /// and quarter and eighth steps only spent 80–120 iterations more before the whole budget
-    /// (measured: the ratio-2e4 strips on a graded 8 × 12 cage, 12 nodes to 7.5 mm: at 67.5°
-    /// 2402 → 2069 iterations, at 22.5° 1296 → 1101, every force the same to the 6–8 digits
-    /// printed). The whole budget resumes the first attempt where it stopped rather than
-    /// repeating its iterations from the predictor (measured on the ratio-2e4 fit of
-    /// `paper_repro/stiff_fit`: Newton iterations 6732 → 6132, every fitted value and printed
-    /// error the same; a cheap attempt from the second predictor before the sub-steps cost
-    /// more, 6796 with the resume and 7272 without).
+    /// and quarter and eighth steps only spend 80–120 iterations more ahead of the whole
+    /// budget. The whole budget resumes the first attempt where it stopped rather than
+    /// repeating its iterations from the predictor, which saves about a tenth of the Newton
+    /// iterations of the ratio-2e4 fit with every fitted value the same; a cheap attempt from
+    /// the second predictor ahead of the sub-steps costs more than it saves.
     pub(super) fn solve_cold(
         &mut self,
         previous: &Last,
@@ -58,8 +49,8 @@ impl StripRig {
     ) -> Solved {
         // the quadratic predictor where it starts lower in energy than Euler's (two energy
         // assemblies): on stiff yarns the path bends too sharply for it (the ratio-1000 strip at
-        // 22.5°, 6 → 7.5 mm: 50 iterations from it, 8 from Euler), while on the bundled
-        // fabrics it is kept (cotton's 1918 iterations unchanged, silk 2534 → 2477)
+        // 22.5°, 6 to 7.5 mm, takes 50 iterations from it and 8 from Euler), while on the
+        // bundled fabrics it saves a few iterations
         let mut starts = vec![self.predict(previous, before, dl)];
         if before.is_some() {
             let euler = self.predict(previous, None, dl);
@@ -103,7 +94,7 @@ impl StripRig {
             .map_or(last, Ok)
     }
 
-    /// Whether a first attempt that ran out of iterations was settling rather than stuck: it
+    /// Whether a first attempt that ran out of iterations is settling rather than stuck: it
     /// cut the relative residual of its start `x0` at least [`SETTLING`]-fold. Its state is then
     /// a wrinkle pattern converging slowly, which the whole budget finishes, and sub-steps would
     /// start that work again (see [`StripRig::solve_cold`]).
@@ -119,7 +110,7 @@ impl StripRig {
     }
 
     /// The equilibrium at `dl` reached from the last one in 2, 4, then 8 equal sub-steps, each
-    /// predicted from the one before and held to `limit` iterations (`None` where every
+    /// predicted from the previous one and held to `limit` iterations (`None` where every
     /// division fails; with `quick`, as soon as the first half-step fails).
     fn sub_steps(
         &mut self,

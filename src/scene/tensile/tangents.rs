@@ -1,7 +1,7 @@
 //! The tangents of a strip's equilibria: ∂q/∂(elongation), the elongation predictor's
 //! slope, and the force sensitivities ∂F/∂k with ∂q/∂k (adjoint form of Clyde et al. 2017,
-//! Eq. 6), refined at the equilibrium itself where the solver's tangent is of a point before a
-//! chorded last step.
+//! Eq. 6), refined at the equilibrium itself where the solver's tangent is of a point ahead
+//! of a chorded last step.
 
 use super::StripRig;
 use crate::solve::SolveError;
@@ -58,10 +58,9 @@ impl StripRig {
             r[d / 3][d % 3] += c;
         }
         // the adjoint K λ = Tᵀ H r at the equilibrium itself: where the tangent is of a point
-        // before a chorded last step, H r and the solve are corrected by products
-        // with the tangent at x (forward differences of the gradient, good to about √ε)
-        // with the tangent at x (forward differences of the gradient, good to about √ε); where
-        // the stale tangent is too far off to refine on, the solution's own is factorised
+        // ahead of a chorded last step, H r and the solve are corrected by products with the
+        // tangent at x (forward differences of the gradient, good to about √ε); where the
+        // stale tangent is too far off to refine on, the solution's own is factorised
         // (counted as an iteration of the point)
         let hr = if lin.refines() {
             lin.hessian_times(&self.model, x, &r)?
@@ -76,10 +75,10 @@ impl StripRig {
             Some(l) => l,
             None => {
                 // the solution's own tangent, regularised where it is not positive definite:
-                // a chorded last step is certified on the tangent before it, and a wrinkling
-                // strip at its bifurcation can pass that certificate and end on a saddle
-                // (measured: the noise-free cotton's 67.5° strip on a graded 16 × 24 cage at
-                // 4.5 mm, which made the whole fit fail here)
+                // a chorded last step is certified on the tangent of the step it follows, and
+                // a wrinkling strip at its bifurcation can pass that certificate and end on a
+                // saddle (the noise-free cotton's 67.5° strip on a graded 16 × 24 cage at
+                // 4.5 mm does, and the whole fit fails without this)
                 let (l, sigma) =
                     crate::solve::Linearization::new_regularized(&self.model, &self.system, x)?;
                 lin = l;

@@ -5,7 +5,7 @@
 use super::StripRig;
 use crate::Vec3;
 
-/// Earlier equilibria kept per point for the secant predictor (two measured best; see
+/// Earlier equilibria kept per point for the secant predictor (two do best; see
 /// [`StripRig::warm_start`]).
 pub(super) const SECANTS: usize = 2;
 
@@ -39,7 +39,7 @@ fn secant_weights(k: &[f64], k1: &[f64], earlier: &[&[f64]]) -> Vec<f64> {
 }
 
 /// Relative residual of a point's start above which the next point's warm start is first
-/// measured against the predictor from the last equilibrium (from 1e-3, Newton needs three
+/// compared with the predictor from the last equilibrium (from 1e-3, Newton needs three
 /// or more iterations).
 pub(super) const POOR_START: f64 = 1e-3;
 
@@ -48,10 +48,9 @@ impl StripRig {
     /// residual) than the predictor from the last equilibrium of this run (two gradient
     /// assemblies). After a large change of the parameters, or of a cut-off that the
     /// parameter tangent does not see, every stored equilibrium can be far off while the
-    /// last point's, just solved, predicts the next to third order in the step (measured on
-    /// the bundled cotton: stale warm starts at 1–4e-2 against predictors at 3e-5–1e-2; the
-    /// five bundled fits' Newton iterations 11465 → 9848 with this choice, 9185 with the
-    /// quadratic predictor as well, failed attempts counted).
+    /// last point's, just solved, predicts the next to third order in the step (on the
+    /// bundled cotton: stale warm starts at 1–4e-2 against predictors at 3e-5–1e-2; the
+    /// choice saves about 14 % of the Newton iterations of the five bundled fits).
     pub(super) fn warm_beats_predictor(
         &mut self,
         w: &[Vec3],
@@ -90,10 +89,10 @@ impl StripRig {
     /// Takes as warm starts, where the two rigs share the mesh and the clamps, the equilibria
     /// of `other` (solved with the same material) interpolated in the elongation by the
     /// quadratic through three of its consecutive points around each of this rig's (the rest
-    /// state before its first): a start for points between another rig's, such as the
-    /// fitter's interpolation check halfway between its nodes (measured there against the
-    /// linear interpolation between the two nearest: Newton iterations 163 → 139 on the
-    /// bundled cotton, 209 → 184 on silk). Returns whether they were taken.
+    /// state ahead of its first): a start for points between another rig's, such as the
+    /// fitter's interpolation check halfway between its nodes, where it saves 12–15 % of the
+    /// Newton iterations of the linear interpolation between the two nearest on the
+    /// bundled cotton and silk. Returns whether they were taken.
     pub fn warm_between(&mut self, other: &StripRig) -> bool {
         let same = self.length == other.length
             && self.model.basis.control_points == other.model.basis.control_points
@@ -158,10 +157,10 @@ impl StripRig {
 
     /// The start at point `i` from its stored equilibrium, moved to the current parameters:
     /// along ∂q/∂k where the last run computed it there (first order), else by the
-    /// multi-secant through the equilibria before it ([`secant_weights`]; a fitter's trials
-    /// without sensitivities: space-mapped starts, line searches). Measured on the five
-    /// bundled fits: Newton iterations 11838 → 10244 with two earlier equilibria kept (one:
-    /// 10392, four: 10489), every fitted parameter within 2e-8. `None` before the first solve.
+    /// multi-secant through the earlier equilibria ([`secant_weights`]; a fitter's trials
+    /// without sensitivities: space-mapped starts, line searches). Two earlier equilibria
+    /// save the most Newton iterations on the five bundled fits (about 13 %; one or four
+    /// save less), every fitted parameter within 2e-8. `None` ahead of the first solve.
     pub(super) fn warm_start(&self, i: usize) -> Option<Vec<Vec3>> {
         let mut x = self.equilibria[i].clone()?;
         if let Some((k0, dq)) = &self.tangents[i] {
@@ -266,9 +265,9 @@ mod tests {
     fn a_stale_warm_start_gives_way_to_the_predictor() {
         let law = linear_law;
         let (m, mut t) = strip_at_30();
-        // the full rule, which `auto` took at these ratios (50 and 150) until 2026-12-06: on
-        // the centre rule this coarse strip's fourth point settles on neighbouring
-        // equilibria 1.5e-4 apart from the two starts, which is not what this test is about
+        // the full rule, which `auto` does not take at these ratios (50 and 150): on the
+        // centre rule this coarse strip's fourth point settles on neighbouring equilibria
+        // 1.5e-4 apart from the two starts, which is not what this test is about
         t.yarn_rule = crate::assembly::YarnRule::Full;
         let nodes = [1e-3, 2e-3, 3e-3, 4e-3, 5e-3];
         let its =

@@ -1,9 +1,7 @@
 //! `ks-fit scene` and `ks-fit export`: the outputs users load elsewhere (OBJ, PLY, CSV,
 //! scene.toml, ARCSim JSON) and the automatic mesh choice, driven through the binary.
 
-mod common;
-
-use common::{first_value, folder, ks_fit, s};
+use crate::common::{first_value, folder, ks_fit, s};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 

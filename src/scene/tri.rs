@@ -8,10 +8,10 @@
 //! holds two columns of nodes (the platform edge and one cell behind it, which holds the
 //! slope), so its grid is one cell longer than the overhang.
 
-use super::{TriGrid, TriMaterial, TriModel};
+use crate::tri::{TriGrid, TriKind, TriMaterial, TriModel};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::model::ClothModel;
-use crate::scene::{BendResult, SceneError, TensilePoint};
+use super::{BendResult, SceneError, TensilePoint};
 use crate::solve::{continuation, newton, FreeSystem, NewtonOptions, SolveError};
 use crate::Vec3;
 
@@ -26,7 +26,7 @@ fn warp_angle(angle_deg: f64) -> f64 {
 /// angle to the warp, so it is refused rather than simulated wrongly.
 fn check_aligned(material: &TriMaterial, angle_deg: f64) -> Result<(), SceneError> {
     let r = angle_deg.rem_euclid(90.0);
-    if material.kind == super::TriKind::Springs && r.min(90.0 - r) > 1e-9 {
+    if material.kind == TriKind::Springs && r.min(90.0 - r) > 1e-9 {
         return Err(SceneError::Input(format!(
             "the springs model needs its grid along the yarns: strips at 0° or 90° (a multiple of 90°), got {angle_deg}°"
         )));
@@ -70,7 +70,7 @@ impl TriTensile {
             width,
             length,
             angle_deg,
-            mesh: crate::scene::default_mesh(width, length),
+            mesh: super::default_mesh(width, length),
             solver: NewtonOptions::default(),
         }
     }
@@ -199,7 +199,7 @@ impl TriCantilever {
             width,
             overhang,
             angle_deg,
-            mesh: crate::scene::CantileverBend::new(width, overhang, angle_deg).mesh,
+            mesh: super::CantileverBend::new(width, overhang, angle_deg).mesh,
             solver: NewtonOptions::default(),
         }
     }
@@ -244,7 +244,7 @@ impl TriCantilever {
             Ok(c) => c,
             // ring-2 bending springs have no stiffness out of the flat plane, so every load
             // step starts singular: the whole load by the robust solver with a long budget
-            Err(_) if material.kind == super::TriKind::Springs => {
+            Err(_) if material.kind == TriKind::Springs => {
                 x = model.grid.positions();
                 model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY]);
                 let opts = NewtonOptions {

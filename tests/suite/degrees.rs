@@ -2,9 +2,7 @@
 //! shear has two terms, made on cages twice as fine as the fit's, must come back with a
 //! degree-2 shear close to the law that made them.
 
-mod common;
-
-use common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s};
 
 /// The bundled cotton: degree-2 η everywhere, at a yarn-to-shear ratio of 50 (`--yarn-rule
 /// auto` puts the yarn terms of its off-axis strips on the face centres).

@@ -1,9 +1,7 @@
 //! End-to-end tests of the `ks-fit` command line: outputs users and scripts rely on, and errors
 //! that name the file and line and exit with code 2.
 
-mod common;
-
-use common::{first_value, ks_fit};
+use crate::common::{first_value, ks_fit};
 
 fn temp_file(name: &str, text: &str) -> String {
     let dir = std::env::temp_dir().join(format!("kshell-cli-{}", std::process::id()));

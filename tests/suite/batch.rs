@@ -4,9 +4,7 @@
 //! `KSHELL_SLURM_TEST=1`, as CI sets it; the test then starts munge and the Slurm daemons
 //! itself, so it runs only where asked).
 
-mod common;
-
-use common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s};
 use std::path::Path;
 use std::process::Command;
 

@@ -2,9 +2,7 @@
 //! naming the file and line or the flag and its range, without a panic, a runaway allocation,
 //! a hang, a silently wrong answer or an overwritten input. Each case here was once one of those.
 
-mod common;
-
-use common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s};
 use std::path::Path;
 
 const MATERIAL: &str = "examples/materials/cotton.toml";

@@ -9,7 +9,8 @@ use crate::material::FabricMaterial;
 use crate::scene::{CantileverBend, CornerPull, Drape, PictureFrame, TensileStrip};
 use crate::solve::NewtonOptions;
 use crate::tri::file::SPRING_CURVATURE;
-use crate::tri::{TriCantilever, TriKind, TriMaterial, TriTensile};
+use crate::scene::{TriCantilever, TriTensile};
+use crate::tri::{TriKind, TriMaterial};
 use std::time::Instant;
 
 /// Faces (across, along) of one mesh.
@@ -367,7 +368,7 @@ pub fn compare_on(
 
 /// The reference value of the shell's `levels` (coarse to fine) and how it was found:
 /// Richardson's extrapolation where the ladder converges monotonically, else the finest level
-/// (with how far the level before it lies). The drape's levels fold differently and are not
+/// (with how far the next coarser level lies). The drape's levels fold differently and are not
 /// each twice as fine: its reference is always the finest.
 fn reference(test: LabTest, levels: Vec<Level>) -> (f64, String) {
     let n = levels.len();

@@ -1,9 +1,7 @@
 //! `--model` on the lab commands, driven through the binary: the triangle models print the
 //! shell's CSV, read and refuse material files clearly, and refuse what they cannot simulate.
 
-mod common;
-
-use common::{first_value, folder, ks_fit};
+use crate::common::{first_value, folder, ks_fit};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 

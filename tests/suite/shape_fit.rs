@@ -6,14 +6,12 @@
 //! takes G12 from a frame's shape and force, or from its force alone where its wrinkles are
 //! not reproduced.
 
-mod common;
-
 use kshell::dataset::{Descriptor, FabricDataset, ShapeScene, ShapeTest};
 use kshell::scene::export::lattice_surface;
 use kshell::scene::PictureFrame;
-use kshell::shape::target::ShapeTarget;
+use kshell::fit::shape_target::ShapeTarget;
 use kshell::shape::ShapeMesh;
-use kshell::tri::fit::{fit_tri, TriFitOptions, SHAPE_TRUST};
+use kshell::fit::tri::{fit_tri, TriFitOptions, SHAPE_TRUST};
 use kshell::tri::{Stiffness, TriKind, TriMaterial};
 use std::path::PathBuf;
 
@@ -38,7 +36,7 @@ fn truth() -> TriMaterial {
 
 /// Warp and weft strips (no bias) and two cantilevers made by `m` on the fit's meshes.
 fn lab(m: &TriMaterial) -> FabricDataset {
-    common::tri_lab(m, &[90.0, 0.0])
+    crate::common::tri_lab(m, &[90.0, 0.0])
 }
 
 /// Each triangle split into four at its edges' midpoints (the same piecewise-linear surface on
@@ -87,7 +85,7 @@ fn frame_target(m: &TriMaterial, mesh: usize, noise: f64) -> ShapeMesh {
     };
     let (_, d) = frame.run_tri(m).unwrap();
     remeshed(
-        &ShapeMesh::from_surface(&lattice_surface(&d.sheet, &d.x)),
+        &lattice_surface(&d.sheet, &d.x).to_shape(),
         noise,
     )
 }
@@ -156,7 +154,7 @@ fn a_shape_the_model_cannot_reproduce_is_flagged() {
     };
     let (_, d) = frame.run(&shell).unwrap();
     let surface = kshell::scene::export::sample(&d.sheet, &d.x, 2).unwrap();
-    let captured = shape(ShapeMesh::from_surface(&surface), Descriptor::Positions, 16);
+    let captured = shape(surface.to_shape(), Descriptor::Positions, 16);
     // the shell predicts its own shape: the same surface to round-off
     let own = ShapeTarget::new(&captured, 1).unwrap().errors_shell(&shell);
     assert!(own.rms_distance < 1e-9 && own.error < 1e-6, "{own:?}");
@@ -192,7 +190,7 @@ fn shell_lab(m: &kshell::material::FabricMaterial) -> FabricDataset {
         c.mesh = (c.mesh.0 * 2, c.mesh.1 * 2);
         c.run(m).unwrap().drape_angle_deg
     };
-    common::made_lab(
+    crate::common::made_lab(
         &[90.0, 0.0],
         4e-4,
         &pull,
@@ -235,7 +233,7 @@ fn the_shell_fit_takes_the_shear_from_a_frame_shape() {
         let (points, d) = frame.run(&m).unwrap();
         let surface = kshell::scene::export::sample(&d.sheet, &d.x, 2).unwrap();
         let mut captured = shape(
-            remeshed(&ShapeMesh::from_surface(&surface), 5e-5),
+            remeshed(&surface.to_shape(), 5e-5),
             Descriptor::Positions,
             12,
         );

@@ -2,10 +2,8 @@
 //! linear material of each model is fitted back to it, and `ks-fit fit --model` writes a
 //! material the lab commands read.
 
-mod common;
-
 use kshell::dataset::FabricDataset;
-use kshell::tri::fit::{fit_tri, TriFitOptions};
+use kshell::fit::tri::{fit_tri, TriFitOptions};
 use kshell::tri::{Stiffness, TriKind, TriMaterial};
 
 fn truth(kind: TriKind) -> TriMaterial {
@@ -33,14 +31,14 @@ fn truth(kind: TriKind) -> TriMaterial {
 }
 
 /// Strips at 90°, 0° and 45° (springs: the yarn directions only) and two cantilevers made by
-/// `m` on the meshes the fit uses (`common::tri_lab`).
+/// `m` on the meshes the fit uses (`crate::common::tri_lab`).
 fn dataset(m: &TriMaterial) -> FabricDataset {
     let angles: &[f64] = if m.kind == TriKind::Springs {
         &[90.0, 0.0]
     } else {
         &[90.0, 0.0, 45.0]
     };
-    common::tri_lab(m, angles)
+    crate::common::tri_lab(m, angles)
 }
 
 /// Every component the data determine comes back within 0.5 %, from a start that the data's

@@ -3,9 +3,7 @@
 //! issue's acceptance numbers), the output loads as a material and carries its `[fit]` table,
 //! and datasets the fit cannot use are refused with exit code 2.
 
-mod common;
-
-use common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s};
 
 /// The `[fit]` table's notes.
 fn notes_of(fit: &toml::Table) -> Vec<&str> {
@@ -217,7 +215,7 @@ fn noise_free_degree2_data_are_fitted_back() {
     );
     check_report_page(&report.join("index.html"), tests.len(), 5);
     // and a browser draws it: the page at 1200 px wide, its first screen not blank
-    if let Some(png) = common::screenshot(
+    if let Some(png) = crate::common::screenshot(
         &report.join("index.html"),
         &dir.join("page.png"),
         1200,
@@ -398,7 +396,7 @@ fn the_fit_is_the_same_on_one_thread_and_on_several() {
     let data = synth_degree2(&dir, "5");
     let run = |threads: &str| {
         let fitted = dir.join(format!("fit-{threads}.toml"));
-        let (rc, out, err) = common::ks_fit_env(
+        let (rc, out, err) = crate::common::ks_fit_env(
             &[
                 "fit",
                 s(&data.join("fabric.toml")),

@@ -170,7 +170,7 @@ impl ShapeTarget {
                 (drape_run(&drape)?, None)
             }
         };
-        Ok((ShapeMesh::from_surface(&surface), force))
+        Ok((surface.to_shape(), force))
     }
 
     /// Residuals (see the module doc); a failed solve gives NaN, which the minimiser rejects.

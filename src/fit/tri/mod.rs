@@ -18,12 +18,12 @@
 //! [`TriMaterial::from_zero_strain`] does. What the data cannot determine is kept at that start
 //! and named in [`TriFit::undetermined`].
 
-use super::curve::Stiffness;
-use super::params::{TriKind, TriMaterial, ZeroStrain};
-use super::scenes::{TriCantilever, TriTensile};
+use crate::tri::curve::Stiffness;
+use crate::tri::params::{TriKind, TriMaterial, ZeroStrain};
+use crate::scene::{TriCantilever, TriTensile};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::{FabricDataset, Role};
-use crate::shape::target::{ShapeFit, ShapeTarget};
+use crate::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::time::Instant;
 
 mod minimise;
@@ -219,7 +219,7 @@ pub fn fit_tri(
         &start.moduli,
         density,
         cell,
-        super::file::SPRING_CURVATURE,
+        crate::tri::file::SPRING_CURVATURE,
     );
     material.coupling = 0.0;
     let mut undetermined = start.undetermined.clone();
@@ -307,8 +307,8 @@ pub fn fit_tri(
     // springs also carry stretch, so for them the stretch stages are repeated too, until no
     // value moves by 0.1 % (at most three more passes). A pass that leaves the fitted lab
     // tests worse off as a whole is undone: each stage only sees its own tests, and on a
-    // shell's cotton the springs' bending stage stiffened the ring-2 springs until the strips
-    // were 330–630 % off and a cantilever no longer solved.
+    // shell's cotton the springs' bending stage can stiffen the ring-2 springs until the
+    // strips are 330–630 % off and a cantilever no longer solves.
     let lab: Vec<usize> = select(&|t: &Target| match t {
         Target::Strip { fitted, .. } => *fitted,
         Target::Bend { .. } => true,

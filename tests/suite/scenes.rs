@@ -2,9 +2,7 @@
 //! outside the code: the picture frame's homogeneous shear in closed form, the work–energy
 //! balance of each scene's reported force, the drape's held corners, and the exported surface.
 
-mod common;
-
-use common::work_balances;
+use crate::common::work_balances;
 use kshell::material::{parse_material, FabricMaterial};
 use kshell::scene::{export, CornerPull, Drape, PictureFrame};
 

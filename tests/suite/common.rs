@@ -1,5 +1,5 @@
-//! Helpers shared by the end-to-end tests that drive the `ks-fit` binary (each test crate
-//! uses some of them).
+//! Fixtures shared by the suite's modules: running the `ks-fit` binary, temporary folders,
+//! hand-made lab data.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -18,9 +18,13 @@ pub fn ks_fit(args: &[&str]) -> (i32, String, String) {
     ks_fit_env(args, &[])
 }
 
-/// A fresh, empty temporary folder named after the test process and `tag`.
+/// A fresh, empty temporary folder named after the test process, the calling test file and
+/// `tag` (every module of the suite runs in one process, so a tag alone could be shared).
+#[track_caller]
 pub fn folder(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kshell-{}-{tag}", std::process::id()));
+    let caller = Path::new(std::panic::Location::caller().file());
+    let module = caller.file_stem().and_then(|s| s.to_str()).unwrap_or("test");
+    let dir = std::env::temp_dir().join(format!("kshell-{}-{module}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -119,7 +123,7 @@ pub fn work_balances(q: &[f64], force: &[f64], energy: &[f64], what: &str) {
 /// cantilever 25 × 50 mm (twice the default mesh), made by the triangle material `m` on the
 /// meshes its fit uses: a dataset whose truth is known.
 pub fn tri_lab(m: &kshell::tri::TriMaterial, angles: &[f64]) -> kshell::dataset::FabricDataset {
-    use kshell::tri::{TriCantilever, TriTensile};
+    use kshell::scene::{TriCantilever, TriTensile};
     let pull = |angle: f64, dl: &[f64]| -> Vec<f64> {
         let mut s = TriTensile::new(0.05, 0.075, angle);
         s.mesh = (8, 12);

@@ -4,9 +4,7 @@
 //! the virtual lab (a known material) and are then spoiled the way real exports are; the fit
 //! must give back the material's stiffness as if they were clean.
 
-mod common;
-
-use common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s};
 use std::path::{Path, PathBuf};
 
 /// Warp and weft stiffen, shear linear; a12 the paper's default.

@@ -3,9 +3,7 @@
 //! closed form (constant-strain triangles follow an affine boundary motion exactly), the
 //! work–energy balance of the reported forces, and the drape's held corners.
 
-mod common;
-
-use common::work_balances;
+use crate::common::work_balances;
 use kshell::scene::{CornerPull, Drape, PictureFrame};
 use kshell::solve::NewtonOptions;
 use kshell::tri::{Stiffness, TriKind, TriMaterial};

@@ -10,9 +10,7 @@
 //! a11 then lies between what the warp strip and the off-axis strips say, and the off-axis
 //! strips follow.
 
-mod common;
-
-use common::{folder, ks_fit, s, tensile_error_at as error_at};
+use crate::common::{folder, ks_fit, s, tensile_error_at as error_at};
 
 const TRUE_A11: f64 = 3.0e7;
 

@@ -11,9 +11,7 @@
 //! Recovery of κ itself on the default ladder is in `paper_repro/off_axis/` (the 8 × 12 level
 //! alone trades κ against η₄'s exponent: the mesh check reports κ moving by 35 % there).
 
-mod common;
-
-use common::{folder, ks_fit, s, tensile_error_at as error_at};
+use crate::common::{folder, ks_fit, s, tensile_error_at as error_at};
 
 const PLAIN: &str = "name = \"plain\"
 areal_density_g_m2 = 150.0

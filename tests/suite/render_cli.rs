@@ -5,9 +5,7 @@
 //! Where no adapter exists the picture checks are skipped with a note, unless
 //! KSHELL_REQUIRE_GPU is set (as CI does after installing Mesa's software driver).
 
-mod common;
-
-use common::{folder, ks_fit, ks_fit_env, s};
+use crate::common::{folder, ks_fit, ks_fit_env, s};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 

@@ -2,9 +2,7 @@
 //! dataset is summarised, broken ones exit with code 2 naming the file and line, and a
 //! synthetic dataset checks, rises, and reproduces its drape angles.
 
-mod common;
-
-use common::ks_fit;
+use crate::common::ks_fit;
 use std::path::{Path, PathBuf};
 
 /// A fresh folder for one test.
