@@ -51,7 +51,7 @@ mod tests {
         let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
         ShellModel::new(
             basis,
-            crate::scene::warp_direction(30.0),
+            crate::material::warp_direction(30.0),
             Arc::new(law),
             1.8e-4,
             0.1,

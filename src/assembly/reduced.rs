@@ -331,7 +331,7 @@ mod tests {
     fn model(rule: YarnRule) -> ShellModel {
         let mesh = graded_grid(0.05, 0.075, 4, 6, crate::mesh::Grading::UNIFORM);
         let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
-        let warp = crate::scene::warp_direction(45.0);
+        let warp = crate::material::warp_direction(45.0);
         let mut m = ShellModel::new(basis, warp, Arc::new(law()), 3e-4, 0.1).unwrap();
         m.set_yarn_rule(rule).unwrap();
         m

@@ -135,7 +135,7 @@ mod tests {
         );
         let mesh = rectangular_grid(0.05, 0.075, 4, 6);
         let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
-        let warp = crate::scene::warp_direction(30.0);
+        let warp = crate::material::warp_direction(30.0);
         let mut model = ShellModel::new(basis, warp, Arc::new(law), tau, 0.1).unwrap();
         let x: Vec<Vec3> = model
             .basis

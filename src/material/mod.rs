@@ -159,6 +159,12 @@ impl Law for OrthotropicStvk {
     }
 }
 
+/// Warp direction of a strip cut at `angle_deg` from the weft, axis along y.
+pub fn warp_direction(angle_deg: f64) -> crate::Vec3 {
+    let t = angle_deg.to_radians();
+    [t.cos(), -t.sin(), 0.0]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

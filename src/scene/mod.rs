@@ -29,6 +29,7 @@ pub use tri::{TriCantilever, TriTensile};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING, STRIP_ITERATIONS};
 
 use crate::assembly::{ModelError, ShellModel, YarnRule};
+pub use crate::material::warp_direction;
 use crate::material::FabricMaterial;
 use crate::mesh::{graded_grid, Grading};
 use crate::solve::{newton, FreeSystem, NewtonOptions, Slave, SolveError, SolveReport};
@@ -73,12 +74,6 @@ fn equilibrium(
         stage: stage(),
         source,
     })
-}
-
-/// Warp direction of a strip cut at `angle_deg` from the weft, axis along y.
-pub fn warp_direction(angle_deg: f64) -> Vec3 {
-    let t = angle_deg.to_radians();
-    [t.cos(), -t.sin(), 0.0]
 }
 
 /// Default quad counts for a strip: 8 across, square-ish elements along (8 × 12 on 50 × 75 mm).
