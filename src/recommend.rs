@@ -7,9 +7,9 @@
 use crate::converge::{analyse, Level};
 use crate::material::FabricMaterial;
 use crate::scene::{CantileverBend, CornerPull, Drape, PictureFrame, TensileStrip};
+use crate::scene::{TriCantilever, TriTensile};
 use crate::solve::NewtonOptions;
 use crate::tri::file::SPRING_CURVATURE;
-use crate::scene::{TriCantilever, TriTensile};
 use crate::tri::{TriKind, TriMaterial};
 use std::time::Instant;
 

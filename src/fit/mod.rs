@@ -1,5 +1,6 @@
 //! Fitting a fabric's test data (Clyde et al. 2017 §5): the staged protocol and the
-//! multiresolution ladder. The stages live in their own modules:
+//! multiresolution ladder. [`fit`] (in `pipeline`) runs the stages in order; they live in
+//! their own modules:
 //! - [`preprocess`]: toe compensation, roles and repeats, the strips the model solves;
 //! - [`map`]: a stage's variables and the law (and the a12 rule);
 //! - `rigs`: the strips kept warm, their node forces and the interpolation to the points;
@@ -52,6 +53,7 @@ pub mod map;
 mod measures;
 mod mesh_check;
 pub mod optim;
+mod pipeline;
 pub mod plausible;
 pub mod preprocess;
 mod refine;
@@ -65,21 +67,22 @@ use joint::StageSets;
 use stages::StageMode;
 mod surrogate;
 mod thickness;
-pub mod tri;
 mod tolerances;
+pub mod tri;
 pub mod uncertainty;
 mod validation;
 pub mod verdict;
 
-use crate::dataset::{FabricDataset, Role};
-use crate::material::{BendingRigidity, Cutoffs, Eta, FabricMaterial, Orthotropic};
+use crate::dataset::FabricDataset;
+use crate::material::{BendingRigidity, FabricMaterial, Orthotropic};
 use crate::scene::{SceneError, StripRig};
 pub use bending::BendingMode;
-use map::{A12Rule, Direction, StageMap};
+use map::{A12Rule, Direction};
 use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
 pub use measures::{Misfit, Objective};
 pub use mesh_check::{MeshCheck, MeshCheckMode};
 use optim::Method;
+pub use pipeline::fit;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
 pub use refine::TestMeshes;
@@ -497,207 +500,4 @@ impl Fitter<'_> {
             (_, true) => e * e,
         }
     }
-}
-
-/// Fits a dataset; progress lines go to `progress`.
-pub fn fit(
-    data: &FabricDataset,
-    opts: &FitOptions,
-    progress: &mut dyn FnMut(&str),
-) -> Result<FitResult, FitError> {
-    if opts.ladder.is_empty() {
-        return Err(FitError::Data("the mesh ladder is empty".into()));
-    }
-    if opts.max_degree == 0 {
-        return Err(FitError::Data("--max-degree must be at least 1".into()));
-    }
-    let start = Instant::now();
-    let mut prep = preprocess::prepare(
-        data,
-        opts.paper_protocol,
-        opts.repeats,
-        opts.toe,
-        opts.nodes,
-    )?;
-    prep.misfit = measures::decide(opts.objective, &prep);
-    let mut notes = data.notes.clone();
-    notes.extend(prep.notes.iter().cloned());
-    if opts.objective == Objective::Auto && prep.misfit == Misfit::Log {
-        notes.push(
-            "objective: ln(F̂/F) per point (--objective auto: repeats are fitted together, and the relative error would weight the weakest repeat most; see --objective)".into(),
-        );
-    }
-    let known = &data.known;
-    let a12 = match (known.a12, known.poisson_12) {
-        (Some(v), _) => A12Rule::Fixed(v),
-        (None, Some(nu)) => A12Rule::Poisson(nu),
-        _ => A12Rule::HalfMin,
-    };
-    let own_bending = bending::use_own_bending(opts.bending, &data.bend)?;
-    if own_bending {
-        notes.push(
-            "bending of its own (--bending orthotropic): the bends fit the warp and weft flexural rigidities; the thickness only splits the strips' a·τ".into(),
-        );
-    }
-    if data.bend.is_empty() && known.thickness.is_none() {
-        notes.push(format!(
-            "thickness not fitted (no bend tests): kept at the measured {:.3} mm",
-            data.thickness * 1e3
-        ));
-    } else if !data.bend.is_empty() && data.areal_density.is_none() {
-        return Err(FitError::Data(
-            "bend tests need the areal density (areal_density_g_m2)".into(),
-        ));
-    }
-    let mut f = Fitter {
-        data,
-        opts,
-        progress,
-        start,
-        stats: FitStats::default(),
-        law: Orthotropic {
-            a11: known.a11.unwrap_or(1.0e8),
-            a22: known.a22.unwrap_or(1.0e8),
-            a12: 0.5e8,
-            g12: known.g12.unwrap_or(2.0e6),
-            warp: Eta::linear(),
-            weft: Eta::linear(),
-            shear: Eta::linear(),
-            cutoffs: Cutoffs::none(),
-            coupling: None,
-        },
-        thickness: known.thickness.unwrap_or(data.thickness),
-        a12,
-        degree_log: Vec::new(),
-        notes,
-        prep,
-        bend_angles: Vec::new(),
-        own_bending,
-        bending: None,
-        uncertainty: Vec::new(),
-        stage_errors: Vec::new(),
-        linearised: Vec::new(),
-        ladder_check: None,
-        bend_refine: 0,
-        ladder_meshes: false,
-        rigs: Default::default(),
-        bend_cache: Default::default(),
-        predictions: Default::default(),
-        yarns: None,
-        yarn_ratio: None,
-        coupling: coupling::CouplingOutcome::Off,
-        stage_rms: f64::NAN,
-        screened: None,
-    };
-    let dirs = [Direction::Warp, Direction::Weft, Direction::Shear];
-    let strips: Vec<Vec<usize>> = dirs.iter().map(|&d| f.stage_strips(d)).collect();
-    let mut maps: Vec<StageMap> = dirs
-        .iter()
-        .zip(&strips)
-        .map(|(&dir, s)| StageMap {
-            dir,
-            xhat: f.xhat(dir, s),
-            c_known: match dir {
-                Direction::Warp => known.a11.is_some(),
-                Direction::Weft => known.a22.is_some(),
-                Direction::Shear => known.g12.is_some(),
-            },
-            a12,
-            coupling: false,
-        })
-        .collect();
-    let has_fit_tests = f.prep.curves.iter().any(|c| c.role == Role::Fit);
-    if strips[0].is_empty() && strips[1].is_empty() && known.a11.is_none() && known.a22.is_none() {
-        return Err(FitError::Data(if has_fit_tests {
-            "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa: nothing to fit the yarn stiffness to (a bias-only dataset needs the yarn stiffnesses in [known])".into()
-        } else {
-            "no fitted tensile test: nothing to fit (every test has role = \"validation\"?)".into()
-        }));
-    }
-    let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
-    f.decide_yarns();
-    let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
-    let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
-    if sets.joint.is_some() {
-        f.notes.push(
-            "joint sweep (--joint): the warp and weft stiffnesses refitted over the off-axis strips too, then the shear, on every mesh".into(),
-        );
-    }
-    let last = *meshes.last().expect("one level at least");
-    // captured shapes fit the shear where no off-axis strip did; the bends' assumed twist
-    // follows the new shear, so the bending (or thickness) stage runs again
-    let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
-    if shapes_fitted {
-        if f.own_bending {
-            f.bending_stage(&data.bend, last)?;
-        } else if !data.bend.is_empty() && known.thickness.is_none() {
-            f.thickness_stage(&data.bend, last)?;
-        }
-    }
-    let own_meshes = opts.test_meshes != TestMeshes::Ladder;
-    let strict = opts.test_meshes == TestMeshes::Strict;
-    if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
-        // the ladder's solved check is of the meshes ahead of the per-test refinement
-        f.ladder_check = None;
-    }
-    let t0 = Instant::now();
-    let mut uncertainty = f.final_uncertainty();
-    let mesh_check = if opts.mesh_check != MeshCheckMode::Off {
-        let mut check = match f.ladder_check.take() {
-            Some(m) => Some(m),
-            None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
-        };
-        f.time_stage("mesh check", t0);
-        // a fit the check fails refines the strips of the stages it would move, then is
-        // checked again
-        while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
-            if !refine::refine_for_check(&mut f, &maps, &sets, last, m, strict)? {
-                break;
-            }
-            let t0 = Instant::now();
-            uncertainty = f.final_uncertainty();
-            check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
-            f.time_stage("mesh check", t0);
-        }
-        check
-    } else {
-        None
-    };
-    let t0 = Instant::now();
-    let tests = validation::outcomes(&mut f, last)?;
-    let identifiability = validation::identifiability(&f, &strips);
-    if let Some(m) = &mesh_check {
-        f.mesh_check_notes(last, m);
-    }
-    f.time_stage("report", t0);
-    let t0 = Instant::now();
-    if f.stats.unstable_solves > 0 {
-        let n = f.stats.unstable_solves;
-        f.notes.push(format!(
-            "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip would wrinkle there); the measured points interpolated from them were excluded from the stage's objective (the curves' excluded_points count those of the final predictions)"
-        ));
-    }
-    f.time_stage("report", t0);
-    f.stats.seconds = f.start.elapsed().as_secs_f64();
-    let material = f.material();
-    let yarn_rule = f.yarns();
-    Ok(FitResult {
-        material,
-        method: format!("{:?}", opts.method).to_lowercase(),
-        meshes,
-        stats: f.stats,
-        degree_log: f.degree_log,
-        notes: f.notes,
-        identifiability,
-        uncertainty,
-        tests,
-        max_error: opts.max_error,
-        mesh_check,
-        shapes_fitted,
-        yarn_rule,
-        shear_coupling: f.coupling,
-        objective: f.prep.misfit,
-        joint: sets.joint.is_some(),
-        test_meshes: opts.test_meshes,
-    })
 }

@@ -7,9 +7,9 @@
 
 pub mod blocks;
 
-pub use blocks::{BlockMatrix, BlockPattern};
 use crate::material::OutOfDomain;
 use crate::Vec3;
+pub use blocks::{BlockMatrix, BlockPattern};
 use std::sync::Arc;
 
 /// What to assemble.

@@ -25,8 +25,8 @@ pub use cantilever::{BendPoint, BendResult, BendRig, CantileverBend, BEND_ELEMEN
 pub use corner::{CornerPull, PullPoint};
 pub use drape::{Drape, DrapeShape};
 pub use frame::{Deformed, FramePoint, PictureFrame};
-pub use tri::{TriCantilever, TriTensile};
 pub use tensile::{StripRig, TensilePoint, TensileStrip, STRIP_GRADING, STRIP_ITERATIONS};
+pub use tri::{TriCantilever, TriTensile};
 
 use crate::assembly::{ModelError, ShellModel, YarnRule};
 pub use crate::material::warp_direction;

@@ -8,11 +8,11 @@
 //! holds two columns of nodes (the platform edge and one cell behind it, which holds the
 //! slope), so its grid is one cell longer than the overhang.
 
-use crate::tri::{TriGrid, TriKind, TriMaterial, TriModel};
+use super::{BendResult, SceneError, TensilePoint};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::model::ClothModel;
-use super::{BendResult, SceneError, TensilePoint};
 use crate::solve::{continuation, newton, FreeSystem, NewtonOptions, SolveError};
+use crate::tri::{TriGrid, TriKind, TriMaterial, TriModel};
 use crate::Vec3;
 
 /// Warp angle from the grid's x axis (the strip's length) of a strip cut at `angle_deg` from

@@ -5,8 +5,8 @@
 
 use crate::material::FabricMaterial;
 use crate::scene::{CantileverBend, SceneError, TensileStrip};
-use crate::tri::file::{TriSource, SPRING_CURVATURE};
 use crate::scene::{TriCantilever, TriTensile};
+use crate::tri::file::{TriSource, SPRING_CURVATURE};
 use crate::tri::TriKind;
 
 /// A model of the fabric the virtual lab runs.

@@ -20,8 +20,8 @@
 use super::grid::{EdgeKind, TriGrid};
 use super::jet::{cross, dot, point, pull_back, sub, vector, Jet};
 use super::params::{TriKind, TriMaterial};
-use crate::model::{BlockMatrix, BlockPattern, ClothModel, Want};
 use crate::material::OutOfDomain;
+use crate::model::{BlockMatrix, BlockPattern, ClothModel, Want};
 use crate::Vec3;
 use std::sync::Arc;
 

@@ -23,7 +23,10 @@ pub fn ks_fit(args: &[&str]) -> (i32, String, String) {
 #[track_caller]
 pub fn folder(tag: &str) -> PathBuf {
     let caller = Path::new(std::panic::Location::caller().file());
-    let module = caller.file_stem().and_then(|s| s.to_str()).unwrap_or("test");
+    let module = caller
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("test");
     let dir = std::env::temp_dir().join(format!("kshell-{}-{module}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();

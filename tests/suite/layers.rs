@@ -78,11 +78,18 @@ fn imported(text: &str) -> BTreeSet<String> {
             if let Some(group) = rest.strip_prefix('{') {
                 let inner = group.split('}').next().unwrap_or("");
                 for item in inner.split(',') {
-                    let name: String = item.trim().chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                    let name: String = item
+                        .trim()
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
                     names.insert(name);
                 }
             } else {
-                let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
                 names.insert(name);
             }
         }
@@ -99,9 +106,14 @@ fn every_import_points_down_the_layers() {
     let rank = |m: &str| ORDER.iter().position(|o| *o == m);
     let mut wrong = Vec::new();
     for file in &files {
-        let Some(me) = top_module(&src, file) else { continue };
+        let Some(me) = top_module(&src, file) else {
+            continue;
+        };
         let Some(my_rank) = rank(&me) else {
-            wrong.push(format!("{}: module `{me}` has no place in ORDER", file.display()));
+            wrong.push(format!(
+                "{}: module `{me}` has no place in ORDER",
+                file.display()
+            ));
             continue;
         };
         let text = std::fs::read_to_string(file).unwrap();
@@ -115,7 +127,11 @@ fn every_import_points_down_the_layers() {
             }
         }
     }
-    assert!(wrong.is_empty(), "imports against the layer order:\n{}", wrong.join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "imports against the layer order:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]

@@ -3,12 +3,12 @@
 //! (`tests/dump.rs` stays a binary of its own: it sets an environment variable that every
 //! solve in its process reads.)
 
-mod common;
 mod basis;
 mod batch;
 mod benchmarks;
 mod cantilever;
 mod cli;
+mod common;
 mod dataset;
 mod degrees;
 mod fit;

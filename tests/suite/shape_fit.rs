@@ -7,11 +7,11 @@
 //! not reproduced.
 
 use kshell::dataset::{Descriptor, FabricDataset, ShapeScene, ShapeTest};
+use kshell::fit::shape_target::ShapeTarget;
+use kshell::fit::tri::{fit_tri, TriFitOptions, SHAPE_TRUST};
 use kshell::scene::export::lattice_surface;
 use kshell::scene::PictureFrame;
-use kshell::fit::shape_target::ShapeTarget;
 use kshell::shape::ShapeMesh;
-use kshell::fit::tri::{fit_tri, TriFitOptions, SHAPE_TRUST};
 use kshell::tri::{Stiffness, TriKind, TriMaterial};
 use std::path::PathBuf;
 
@@ -84,10 +84,7 @@ fn frame_target(m: &TriMaterial, mesh: usize, noise: f64) -> ShapeMesh {
         ..PictureFrame::new(0.1, 30.0)
     };
     let (_, d) = frame.run_tri(m).unwrap();
-    remeshed(
-        &lattice_surface(&d.sheet, &d.x).to_shape(),
-        noise,
-    )
+    remeshed(&lattice_surface(&d.sheet, &d.x).to_shape(), noise)
 }
 
 fn shape(target: ShapeMesh, descriptor: Descriptor, mesh: usize) -> ShapeTest {

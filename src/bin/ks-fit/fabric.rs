@@ -2,9 +2,9 @@
 //! holds and what `fit` will do with it) and `synth` (a dataset from a material).
 
 use crate::guard::Guard;
+use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use kshell::io::{cell, num};
 use kshell::material::load_material;
-use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
 
 /// Highest degree of an η the fit accepts (each degree adds two parameters per direction).

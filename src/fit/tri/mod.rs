@@ -18,12 +18,12 @@
 //! [`TriMaterial::from_zero_strain`] does. What the data cannot determine is kept at that start
 //! and named in [`TriFit::undetermined`].
 
-use crate::tri::curve::Stiffness;
-use crate::tri::params::{TriKind, TriMaterial, ZeroStrain};
-use crate::scene::{TriCantilever, TriTensile};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::{FabricDataset, Role};
 use crate::fit::shape_target::{ShapeFit, ShapeTarget};
+use crate::scene::{TriCantilever, TriTensile};
+use crate::tri::curve::Stiffness;
+use crate::tri::params::{TriKind, TriMaterial, ZeroStrain};
 use std::time::Instant;
 
 mod minimise;

@@ -1,0 +1,309 @@
+//! The fit as its list of stages (Clyde et al. 2017 §5, extended): set-up, the homogeneous
+//! bootstrap, the multiresolution ladder of shell stages, the shear from captured shapes, each
+//! test's own mesh, the mesh check, and validation. Each stage is a function with its inputs
+//! and outputs in its signature; the [`Fitter`] carries the law being fitted, the warm strips
+//! and the notes, timings and progress lines that every stage adds to.
+
+use super::map::{A12Rule, Direction, StageMap};
+use super::measures::{self, Misfit, Objective};
+use super::mesh_check::{MeshCheck, MeshCheckMode};
+use super::refine::TestMeshes;
+use super::{
+    bending, coupling, is_determined, joint, ladder, preprocess, refine, stages, uncertainty,
+    validation, FitError, FitOptions, FitResult, FitStats, Fitter,
+};
+use crate::dataset::{FabricDataset, Role};
+use crate::material::{Cutoffs, Eta, Orthotropic};
+use joint::StageSets;
+use std::time::Instant;
+
+/// Fits a dataset; progress lines go to `progress`.
+pub fn fit(
+    data: &FabricDataset,
+    opts: &FitOptions,
+    progress: &mut dyn FnMut(&str),
+) -> Result<FitResult, FitError> {
+    check_options(opts)?;
+    let start = Instant::now();
+    let setup = set_up(data, opts)?;
+    let mut f = Fitter::new(data, opts, progress, start, setup);
+    let strips = fitted_strips(&f);
+    let mut maps = stage_maps(&f, &strips);
+    require_yarn_data(&f, &strips)?;
+    let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
+    f.decide_yarns();
+    let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
+    let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
+    if sets.joint.is_some() {
+        f.notes.push(
+            "joint sweep (--joint): the warp and weft stiffnesses refitted over the off-axis strips too, then the shear, on every mesh".into(),
+        );
+    }
+    let last = *meshes.last().expect("one level at least");
+    let shapes_fitted = shapes_then_bends(&mut f, &strips, last)?;
+    let own_meshes = opts.test_meshes != TestMeshes::Ladder;
+    if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
+        // the ladder's solved check is of the meshes ahead of the per-test refinement
+        f.ladder_check = None;
+    }
+    let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &sets, last)?;
+    let t0 = Instant::now();
+    let tests = validation::outcomes(&mut f, last)?;
+    let identifiability = validation::identifiability(&f, &strips);
+    if let Some(m) = &mesh_check {
+        f.mesh_check_notes(last, m);
+    }
+    f.time_stage("report", t0);
+    closing_notes(&mut f);
+    f.stats.seconds = f.start.elapsed().as_secs_f64();
+    let material = f.material();
+    let yarn_rule = f.yarns();
+    Ok(FitResult {
+        material,
+        method: format!("{:?}", opts.method).to_lowercase(),
+        meshes,
+        stats: f.stats,
+        degree_log: f.degree_log,
+        notes: f.notes,
+        identifiability,
+        uncertainty,
+        tests,
+        max_error: opts.max_error,
+        mesh_check,
+        shapes_fitted,
+        yarn_rule,
+        shear_coupling: f.coupling,
+        objective: f.prep.misfit,
+        joint: sets.joint.is_some(),
+        test_meshes: opts.test_meshes,
+    })
+}
+
+/// Options no fit can run with.
+fn check_options(opts: &FitOptions) -> Result<(), FitError> {
+    if opts.ladder.is_empty() {
+        return Err(FitError::Data("the mesh ladder is empty".into()));
+    }
+    if opts.max_degree == 0 {
+        return Err(FitError::Data("--max-degree must be at least 1".into()));
+    }
+    Ok(())
+}
+
+/// What the fit starts from: the prepared curves and strips, the notes so far, the a12 rule
+/// and whether the bends fit rigidities of their own.
+pub(super) struct SetUp {
+    pub prep: preprocess::Prepared,
+    pub notes: Vec<String>,
+    pub a12: A12Rule,
+    pub own_bending: bool,
+}
+
+/// Prepares the curves (toe, repeats, roles, nodes), decides the misfit, the a12 rule and the
+/// bending mode, and refuses bend tests without an areal density.
+fn set_up(data: &FabricDataset, opts: &FitOptions) -> Result<SetUp, FitError> {
+    let mut prep = preprocess::prepare(
+        data,
+        opts.paper_protocol,
+        opts.repeats,
+        opts.toe,
+        opts.nodes,
+    )?;
+    prep.misfit = measures::decide(opts.objective, &prep);
+    let mut notes = data.notes.clone();
+    notes.extend(prep.notes.iter().cloned());
+    if opts.objective == Objective::Auto && prep.misfit == Misfit::Log {
+        notes.push(
+            "objective: ln(F̂/F) per point (--objective auto: repeats are fitted together, and the relative error would weight the weakest repeat most; see --objective)".into(),
+        );
+    }
+    let known = &data.known;
+    let a12 = match (known.a12, known.poisson_12) {
+        (Some(v), _) => A12Rule::Fixed(v),
+        (None, Some(nu)) => A12Rule::Poisson(nu),
+        _ => A12Rule::HalfMin,
+    };
+    let own_bending = bending::use_own_bending(opts.bending, &data.bend)?;
+    if own_bending {
+        notes.push(
+            "bending of its own (--bending orthotropic): the bends fit the warp and weft flexural rigidities; the thickness only splits the strips' a·τ".into(),
+        );
+    }
+    if data.bend.is_empty() && known.thickness.is_none() {
+        notes.push(format!(
+            "thickness not fitted (no bend tests): kept at the measured {:.3} mm",
+            data.thickness * 1e3
+        ));
+    } else if !data.bend.is_empty() && data.areal_density.is_none() {
+        return Err(FitError::Data(
+            "bend tests need the areal density (areal_density_g_m2)".into(),
+        ));
+    }
+    Ok(SetUp {
+        prep,
+        notes,
+        a12,
+        own_bending,
+    })
+}
+
+impl<'a> Fitter<'a> {
+    /// A fitter at the start: a linear law at the known values (or generic ones), the
+    /// measured thickness, no stage run.
+    fn new(
+        data: &'a FabricDataset,
+        opts: &'a FitOptions,
+        progress: &'a mut dyn FnMut(&str),
+        start: Instant,
+        setup: SetUp,
+    ) -> Self {
+        let known = &data.known;
+        Fitter {
+            data,
+            opts,
+            progress,
+            start,
+            stats: FitStats::default(),
+            law: Orthotropic {
+                a11: known.a11.unwrap_or(1.0e8),
+                a22: known.a22.unwrap_or(1.0e8),
+                a12: 0.5e8,
+                g12: known.g12.unwrap_or(2.0e6),
+                warp: Eta::linear(),
+                weft: Eta::linear(),
+                shear: Eta::linear(),
+                cutoffs: Cutoffs::none(),
+                coupling: None,
+            },
+            thickness: known.thickness.unwrap_or(data.thickness),
+            a12: setup.a12,
+            degree_log: Vec::new(),
+            notes: setup.notes,
+            prep: setup.prep,
+            bend_angles: Vec::new(),
+            own_bending: setup.own_bending,
+            bending: None,
+            uncertainty: Vec::new(),
+            stage_errors: Vec::new(),
+            linearised: Vec::new(),
+            ladder_check: None,
+            bend_refine: 0,
+            ladder_meshes: false,
+            rigs: Default::default(),
+            bend_cache: Default::default(),
+            predictions: Default::default(),
+            yarns: None,
+            yarn_ratio: None,
+            coupling: coupling::CouplingOutcome::Off,
+            stage_rms: f64::NAN,
+            screened: None,
+        }
+    }
+}
+
+/// The three stages' directions, in the order they run.
+const DIRECTIONS: [Direction; 3] = [Direction::Warp, Direction::Weft, Direction::Shear];
+
+/// The fitted strips of the warp, weft and shear stages.
+fn fitted_strips(f: &Fitter) -> Vec<Vec<usize>> {
+    DIRECTIONS.iter().map(|&d| f.stage_strips(d)).collect()
+}
+
+/// Each stage's variables over the law (see [`StageMap`]).
+fn stage_maps(f: &Fitter, strips: &[Vec<usize>]) -> Vec<StageMap> {
+    let known = &f.data.known;
+    DIRECTIONS
+        .iter()
+        .zip(strips)
+        .map(|(&dir, s)| StageMap {
+            dir,
+            xhat: f.xhat(dir, s),
+            c_known: match dir {
+                Direction::Warp => known.a11.is_some(),
+                Direction::Weft => known.a22.is_some(),
+                Direction::Shear => known.g12.is_some(),
+            },
+            a12: f.a12,
+            coupling: false,
+        })
+        .collect()
+}
+
+/// Refuses a dataset with nothing to fit the yarn stiffness to.
+fn require_yarn_data(f: &Fitter, strips: &[Vec<usize>]) -> Result<(), FitError> {
+    let known = &f.data.known;
+    let has_fit_tests = f.prep.curves.iter().any(|c| c.role == Role::Fit);
+    if strips[0].is_empty() && strips[1].is_empty() && known.a11.is_none() && known.a22.is_none() {
+        return Err(FitError::Data(if has_fit_tests {
+            "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa: nothing to fit the yarn stiffness to (a bias-only dataset needs the yarn stiffnesses in [known])".into()
+        } else {
+            "no fitted tensile test: nothing to fit (every test has role = \"validation\"?)".into()
+        }));
+    }
+    Ok(())
+}
+
+/// Captured shapes fit the shear where no off-axis strip did; the bends' assumed twist follows
+/// the new shear, so the bending (or thickness) stage runs again. Whether shapes fitted G12.
+fn shapes_then_bends(
+    f: &mut Fitter,
+    strips: &[Vec<usize>],
+    last: (usize, usize),
+) -> Result<bool, FitError> {
+    let data = f.data;
+    let known = &data.known;
+    let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
+    if shapes_fitted {
+        if f.own_bending {
+            f.bending_stage(&data.bend, last)?;
+        } else if !data.bend.is_empty() && known.thickness.is_none() {
+            f.thickness_stage(&data.bend, last)?;
+        }
+    }
+    Ok(shapes_fitted)
+}
+
+/// The final standard errors and the mesh check; a check that fails refines the strips of the
+/// stages it would move, and the fit is checked again (with `--test-meshes` other than ladder).
+fn checked_meshes(
+    f: &mut Fitter,
+    maps: &[StageMap],
+    sets: &StageSets,
+    last: (usize, usize),
+) -> Result<(Vec<uncertainty::ParamError>, Option<MeshCheck>), FitError> {
+    let opts = f.opts;
+    let own_meshes = opts.test_meshes != TestMeshes::Ladder;
+    let strict = opts.test_meshes == TestMeshes::Strict;
+    let t0 = Instant::now();
+    let mut uncertainty = f.final_uncertainty();
+    if opts.mesh_check == MeshCheckMode::Off {
+        return Ok((uncertainty, None));
+    }
+    let mut check = match f.ladder_check.take() {
+        Some(m) => Some(m),
+        None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
+    };
+    f.time_stage("mesh check", t0);
+    while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
+        if !refine::refine_for_check(f, maps, sets, last, m, strict)? {
+            break;
+        }
+        let t0 = Instant::now();
+        uncertainty = f.final_uncertainty();
+        check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
+        f.time_stage("mesh check", t0);
+    }
+    Ok((uncertainty, check))
+}
+
+/// The notes that close a fit (unstable equilibria left out of the objective).
+fn closing_notes(f: &mut Fitter) {
+    let t0 = Instant::now();
+    if f.stats.unstable_solves > 0 {
+        let n = f.stats.unstable_solves;
+        f.notes.push(format!(
+            "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip would wrinkle there); the measured points interpolated from them were excluded from the stage's objective (the curves' excluded_points count those of the final predictions)"
+        ));
+    }
+    f.time_stage("report", t0);
+}
