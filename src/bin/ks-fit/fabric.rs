@@ -1,74 +1,10 @@
-//! The fabric commands of `ks-fit`: `fit` (a dataset to a material), `check` (what a dataset
-//! holds and what `fit` will do with it) and `synth` (a dataset from a material).
+//! The fabric commands of `ks-fit`: `fit` on the shell (a dataset to a material) and `check`
+//! (what a dataset holds and what `fit` will do with it).
 
 use crate::guard::Guard;
 use kshell::io::{cell, num};
-use kshell::material::load_material;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
-
-/// Highest degree of an η the fit accepts (each degree adds two parameters per direction).
-const MAX_DEGREE: usize = 8;
-
-/// The fit's settings from its flags, checked.
-#[allow(clippy::too_many_arguments)]
-pub fn fit_options(
-    max_degree: usize,
-    fixed_degree: Option<usize>,
-    mesh_ladder: &str,
-    method: kshell::fit::optim::Method,
-    protocol: &str,
-    toe: kshell::fit::ToeMode,
-    repeats: kshell::fit::RepeatMode,
-    max_misalign: f64,
-    nodes: usize,
-    max_error_percent: f64,
-) -> Result<kshell::fit::FitOptions, String> {
-    let max_error = max_error_fraction(max_error_percent)?;
-    if max_degree == 0 || fixed_degree == Some(0) {
-        return Err("degrees start at 1 (--max-degree, --degree)".into());
-    }
-    if max_degree > MAX_DEGREE || fixed_degree.is_some_and(|d| d > MAX_DEGREE) {
-        return Err(format!(
-            "degrees go up to {MAX_DEGREE} (--max-degree, --degree; the paper needed at most 5)"
-        ));
-    }
-    if !(0.0..=15.0).contains(&max_misalign) {
-        return Err(format!(
-            "--max-misalign must be in [0, 15] degrees, got {max_misalign:?}"
-        ));
-    }
-    if !(4..=200).contains(&nodes) {
-        return Err(format!("--nodes must be in [4, 200], got {nodes}"));
-    }
-    let ladder =
-        kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
-    kshell::converge::check_ladder(&ladder, false).map_err(|e| format!("--mesh-ladder: {e}"))?;
-    Ok(kshell::fit::FitOptions {
-        max_degree,
-        fixed_degree,
-        ladder,
-        method,
-        paper_protocol: protocol == "paper",
-        toe,
-        repeats,
-        max_misalign_deg: max_misalign,
-        nodes,
-        max_error,
-        ..kshell::fit::FitOptions::default()
-    })
-}
-
-/// `--max-error` (a percentage in (0, 1000]) as a fraction.
-pub fn max_error_fraction(percent: f64) -> Result<f64, String> {
-    if percent.is_finite() && percent > 0.0 && percent <= 1000.0 {
-        Ok(percent / 100.0)
-    } else {
-        Err(format!(
-            "--max-error must be a percentage in (0, 1000], got {percent:?}"
-        ))
-    }
-}
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.
 fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
@@ -80,8 +16,6 @@ fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
     })
 }
 
-/// Runs `ks-fit fit`; `Ok(false)` when the fit missed `--max-error` on a fitted test (the
-/// material and report are written all the same).
 /// Where `--report` goes and whether it draws the scenes.
 pub struct ReportArgs<'a> {
     pub dir: &'a Path,
@@ -89,6 +23,8 @@ pub struct ReportArgs<'a> {
     pub scenes: Option<&'a crate::render::ImageArgs>,
 }
 
+/// Runs `ks-fit fit` on the shell; `Ok(false)` when the fit missed `--max-error` on a fitted
+/// test (the material and report are written all the same).
 pub fn cmd_fit(
     file: &Path,
     output: Option<&Path>,
@@ -287,8 +223,9 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     );
     let mut info = Vec::new();
     // what `ks-fit fit` will do with each curve by default (no solves: roles, toes, repeats)
-    use kshell::fit::preprocess::{prepare, RepeatMode, ToeMode};
-    let prep = prepare(&data, false, RepeatMode::All, ToeMode::Auto, 12);
+    use kshell::fit::preprocess::prepare;
+    let d = kshell::fit::FitOptions::default();
+    let prep = prepare(&data, d.paper_protocol, d.repeats, d.toe, d.nodes);
     for (i, t) in data.tensile.iter().enumerate() {
         let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let max_elong = t.elongation.last().copied().unwrap_or(0.0);
@@ -399,115 +336,6 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
         refusal
             .map(|why| format!("; ks-fit fit would refuse it: {why}"))
             .unwrap_or_default()
-    );
-    Ok(())
-}
-
-/// The model `synth --model` runs, read from the material file.
-fn lab_model(material: &Path, model: &str) -> Result<kshell::synth::LabModel, String> {
-    use kshell::synth::LabModel;
-    use kshell::tri::file::{load_tri, TriSource};
-    if model == "kl" {
-        return Ok(LabModel::Shell(
-            load_material(material).map_err(|e| e.to_string())?,
-        ));
-    }
-    let kind: kshell::tri::TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
-    let source = load_tri(material, kind).map_err(|e| e.to_string())?;
-    let (name, thickness) = match &source {
-        TriSource::Shell(m) => (m.name.clone(), m.thickness),
-        TriSource::Table(_) => {
-            // a [model] table has no thickness; the dataset records the file's thickness_mm
-            let text = std::fs::read_to_string(material)
-                .map_err(|e| format!("{}: {e}", material.display()))?;
-            let doc: toml::Table = text
-                .parse()
-                .map_err(|e| format!("{}: {e}", material.display()))?;
-            let number = |k: &str| {
-                doc.get(k)
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-            };
-            let thickness = number("thickness_mm").filter(|t| t.is_finite() && *t > 0.0).ok_or_else(|| {
-                format!(
-                    "{}: synth --model {model} needs thickness_mm (a positive number) beside the [model] table: the dataset records the fabric's thickness",
-                    material.display()
-                )
-            })?;
-            let name = doc
-                .get("name")
-                .and_then(|v| v.as_str())
-                .unwrap_or(model)
-                .to_string();
-            (name, thickness * 1e-3)
-        }
-    };
-    Ok(LabModel::Tri {
-        kind,
-        source,
-        name,
-        thickness,
-    })
-}
-
-pub fn cmd_synth(
-    material: &Path,
-    out: &Path,
-    model: &str,
-    opts: &kshell::synth::SynthOptions,
-    force: bool,
-) -> Result<(), String> {
-    if model != "kl" && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
-        return Err(format!(
-            "--grading applies to the kl model's strip cage, not to --model {model}"
-        ));
-    }
-    if model != "kl" && opts.yarn_rule != kshell::assembly::YarnRule::Auto {
-        return Err(format!(
-            "--yarn-rule applies to the kl model's limit surface, not to --model {model}"
-        ));
-    }
-    let lab = lab_model(material, model)?;
-    let mut guard = Guard::new(force);
-    guard.input(material);
-    guard.folder("--out", out, "fabric.toml")?;
-    let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
-    let data =
-        kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
-    let comment = format!(
-        "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
-         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{} --yarn-rule {}{}\n\
-         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees{}",
-        material.display(),
-        lab.model_name(),
-        opts.max_strain,
-        opts.points,
-        opts.repeats,
-        opts.noise,
-        opts.misalign_deg,
-        opts.seed,
-        opts.mesh.0,
-        opts.mesh.1,
-        opts.grading.across,
-        opts.grading.along,
-        opts.yarn_rule.name(),
-        if opts.extra_angles.is_empty() {
-            String::new()
-        } else {
-            let a: Vec<String> = opts.extra_angles.iter().map(|a| a.to_string()).collect();
-            format!(" --angles {}", a.join(","))
-        },
-        data.notes
-            .iter()
-            .map(|n| format!("\n{n}"))
-            .collect::<String>()
-    );
-    kshell::dataset::write_dataset_with_comment(out, &data, &comment)
-        .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;
-    println!(
-        "wrote {} ({} tensile curves, {} bend tests)",
-        out.join("fabric.toml").display(),
-        data.tensile.len(),
-        data.bend.len()
     );
     Ok(())
 }

@@ -122,7 +122,7 @@ pub fn bend(
 pub fn fit(
     file: &Path,
     output: Option<&Path>,
-    model: &str,
+    kind: TriKind,
     quiet: bool,
     force: bool,
     allow_outside: bool,
@@ -130,7 +130,6 @@ pub fn fit(
 ) -> Result<bool, String> {
     use kshell::fit::tri::{fit_tri, TriFitOptions};
     use std::fmt::Write;
-    let kind: TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
     let (data, warnings) =
         kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
     let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {

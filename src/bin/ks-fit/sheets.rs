@@ -3,6 +3,7 @@
 //! discretisation error meets `--tol`, with the deformed surface written as OBJ and PLY, the
 //! quantities of interest as CSV, and `scene.toml` saying what was run and how well.
 
+use crate::flags::Model;
 use crate::guard::Guard;
 use crate::scene_shape::{SceneMaterial, Shape};
 use clap::Subcommand;
@@ -41,17 +42,9 @@ pub struct ShowArgs {
     /// buckles: 0 the lowest mode, any other value a pseudo-random mix of low modes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// How each equilibrium is solved: `full-step`, `ramp` and `adaptive` (Newton with the
-    /// energy line search and the backward-Euler fallback; they differ in how a load is
-    /// brought on, here only the drape's weight) or `trust-region` (trust-region Newton on
-    /// the factorised Hessian, backward Euler the last resort). See the stability atlas.
-    #[arg(long, default_value = "full-step")]
+    #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = crate::flags::strategy_help(" of every equilibrium (the load brought on is only the drape's weight; see the stability atlas)"))]
     strategy: kshell::solve::Strategy,
-    /// Cloth model: kl (the subdivision shell, Clyde et al. 2017), or a triangle model
-    /// (springs, soft-constraints, stvk-ds, xpbd) on the same sheet as a grid of n × n cells
-    /// split by one diagonal, with the file's [model] table or the shell law converted at
-    /// each mesh's cell size.
-    #[arg(long, default_value = "kl")]
+    #[arg(long, default_value = "kl", help = crate::flags::model_help("; a triangle model on the same sheet as a grid of n × n cells split by one diagonal, with the file's [model] table or the shell law converted at each mesh's cell size"))]
     model: String,
     /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
     /// is reported anyway).
@@ -312,10 +305,9 @@ struct Choice {
 pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
     scene.check()?;
     let a = scene.args();
-    let material = match a.model.as_str() {
-        "kl" => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
-        m => {
-            let kind = m.parse().map_err(|e| format!("--model: {e}"))?;
+    let material = match Model::parse(&a.model)? {
+        Model::Kl => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
+        Model::Tri(kind) => {
             SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
         }
     };
