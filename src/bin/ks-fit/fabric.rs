@@ -3,6 +3,7 @@
 
 use crate::guard::Guard;
 use kshell::io::{cell, num};
+use kshell::dataset::FabricDataset;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use std::path::{Path, PathBuf};
 
@@ -81,28 +82,50 @@ pub fn cmd_fit(
     kshell::io::write_atomic(&out, text)
         .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     if let Some(r) = &report {
-        let dir = r.dir;
-        progress("writing the report (CSV and SVG of every test, index.html)");
-        let mut files = fit_report::write_report(&result, dir)
-            .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
-        let (figures, notes) = match r.scenes {
-            Some(args) => crate::sheets::report_figures(&result.material, args, &mut progress),
-            None => (Vec::new(), Vec::new()),
-        };
-        for n in &notes {
-            eprintln!("ks-fit: fit: {n}");
-        }
-        let page = kshell::fit::html::fit_html(&result, &file.display().to_string(), &figures);
-        let index = dir.join("index.html");
-        kshell::io::write_atomic(&index, page)
-            .map_err(|e| format!("cannot write {}: {e}", index.display()))?;
-        files.push(index.display().to_string());
-        progress(&format!(
-            "report: {} files in {}",
-            files.len(),
-            dir.display()
-        ));
+        write_fit_report(&result, r, file, &mut progress)?;
     }
+    print_fit(&result, quiet);
+    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
+    crate::models::print_shape_rows(&rows);
+    println!("wrote {}", out.display());
+    Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
+}
+
+/// Writes `--report`: the CSV and SVG of every test, the scenes where asked, index.html.
+fn write_fit_report(
+    result: &kshell::fit::FitResult,
+    r: &ReportArgs,
+    file: &Path,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(), String> {
+    use kshell::fit::report as fit_report;
+    let dir = r.dir;
+    progress("writing the report (CSV and SVG of every test, index.html)");
+    let mut files = fit_report::write_report(result, dir)
+        .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
+    let (figures, notes) = match r.scenes {
+        Some(args) => crate::sheets::report_figures(&result.material, args, progress),
+        None => (Vec::new(), Vec::new()),
+    };
+    for n in &notes {
+        eprintln!("ks-fit: fit: {n}");
+    }
+    let page = kshell::fit::html::fit_html(result, &file.display().to_string(), &figures);
+    let index = dir.join("index.html");
+    kshell::io::write_atomic(&index, page)
+        .map_err(|e| format!("cannot write {}: {e}", index.display()))?;
+    files.push(index.display().to_string());
+    progress(&format!(
+        "report: {} files in {}",
+        files.len(),
+        dir.display()
+    ));
+    Ok(())
+}
+
+/// The fit's notes, uncertainties, per-test table and timing on stdout.
+fn print_fit(result: &kshell::fit::FitResult, quiet: bool) {
+    use kshell::fit::report as fit_report;
     // the degree choice is shown as progress; print it here only when progress is off
     let shown = if quiet { &result.degree_log[..] } else { &[] };
     for line in shown.iter().chain(&result.notes) {
@@ -134,7 +157,7 @@ pub fn cmd_fit(
     for line in &result.identifiability {
         println!("identifiability: {line}");
     }
-    print!("{}", fit_report::table(&result));
+    print!("{}", fit_report::table(result));
     let stages: Vec<String> = result
         .stats
         .stage_seconds
@@ -160,10 +183,6 @@ pub fn cmd_fit(
         result.stats.equilibria,
         stages.join(", ")
     );
-    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
-    crate::models::print_shape_rows(&rows);
-    println!("wrote {}", out.display());
-    Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
 }
 
 /// Each `[[shape]]` simulated with the fitted shell on the shape's mesh: a prediction
@@ -190,111 +209,17 @@ fn predict_shapes(
 pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     let (data, warnings) =
         kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
-    println!("dataset: {}", file.display());
-    println!("name: {}", data.name);
-    match data.areal_density {
-        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
-        None => println!("areal density: not given"),
-    }
-    println!(
-        "thickness: {} mm (measured; the fit's initial guess)",
-        num(data.thickness * 1e3)
-    );
-    println!(
-        "tests: {} tensile, {} bend",
-        data.tensile.len(),
-        data.bend.len()
-    );
-    for sh in &data.shapes {
-        println!(
-            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model); the shell fit fits G12 to a frame or corner-pull shape where no off-axis strip does, and predicts it otherwise",
-            sh.scene.describe(),
-            sh.obj.display(),
-            sh.target.positions.len(),
-            sh.target.triangles.len(),
-            cell(sh.target.thinnest_spread() * 1e3, 3),
-            sh.descriptor.name(),
-            sh.force.map_or(String::new(), |f| format!(", force {f} N")),
-        );
-    }
+    print_dataset(file, &data);
     println!(
         "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",
         "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"
     );
     let mut info = Vec::new();
     // what `ks-fit fit` will do with each curve by default (no solves: roles, toes, repeats)
-    use kshell::fit::preprocess::prepare;
     let d = kshell::fit::FitOptions::default();
-    let prep = prepare(&data, d.paper_protocol, d.repeats, d.toe, d.nodes);
-    for (i, t) in data.tensile.iter().enumerate() {
-        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
-        let role = match t.role(false) {
-            kshell::dataset::Role::Fit => "fitted",
-            kshell::dataset::Role::Validation => "validation",
-        };
-        if t.role.is_none() && !t.is_fitted() {
-            info.push(format!(
-                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
-                t.angle_deg,
-                t.curve.display()
-            ));
-        }
-        let toe = match &prep {
-            Ok(p) => p
-                .curves
-                .iter()
-                .find(|c| c.test == i)
-                .filter(|c| c.toe != 0.0)
-                .map(|c| {
-                    format!(
-                        ", toe {:.3} mm {}",
-                        c.toe * 1e3,
-                        if c.toe_auto { "detected" } else { "given" }
-                    )
-                })
-                .unwrap_or_default(),
-            Err(_) => String::new(),
-        };
-        println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
-            "tensile",
-            t.angle_deg,
-            num(t.width * 1e3),
-            num(t.gauge_length * 1e3),
-            t.elongation.len(),
-            cell(max_elong * 1e3, 4),
-            cell(max_force, 4),
-            t.curve.display()
-        );
-    }
-    let own_bending = data.bend.iter().any(|b| b.angle_deg == 90.0)
-        && data.bend.iter().any(|b| b.angle_deg == 0.0);
-    if own_bending {
-        info.push(
-            "bending: warp and weft bends present: fit fits their flexural rigidities of their own (the default; --bending paper fits one thickness instead)".into(),
-        );
-    }
-    for b in &data.bend {
-        let role = if own_bending {
-            "fitted: bending rigidity"
-        } else if data.known.thickness.is_some() {
-            "predicted: thickness known"
-        } else {
-            "fitted"
-        };
-        println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
-            "bend",
-            b.angle_deg,
-            num(b.width * 1e3),
-            num(b.overhang * 1e3),
-            "-",
-            "-",
-            "-",
-            b.drape_angle_deg
-        );
-    }
+    let prep = kshell::fit::preprocess::prepare(&data, d.paper_protocol, d.repeats, d.toe, d.nodes);
+    print_tensile(&data, &prep, &mut info);
+    print_bends(&data, &mut info);
     let k = &data.known;
     for (name, v) in [
         ("a11_pa", k.a11),
@@ -338,4 +263,116 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
             .unwrap_or_default()
     );
     Ok(())
+}
+
+/// The dataset's header lines: name, density, thickness, counts, shapes.
+fn print_dataset(file: &Path, data: &FabricDataset) {
+    println!("dataset: {}", file.display());
+    println!("name: {}", data.name);
+    match data.areal_density {
+        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
+        None => println!("areal density: not given"),
+    }
+    println!(
+        "thickness: {} mm (measured; the fit's initial guess)",
+        num(data.thickness * 1e3)
+    );
+    println!(
+        "tests: {} tensile, {} bend",
+        data.tensile.len(),
+        data.bend.len()
+    );
+    for sh in &data.shapes {
+        println!(
+            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model); the shell fit fits G12 to a frame or corner-pull shape where no off-axis strip does, and predicts it otherwise",
+            sh.scene.describe(),
+            sh.obj.display(),
+            sh.target.positions.len(),
+            sh.target.triangles.len(),
+            cell(sh.target.thinnest_spread() * 1e3, 3),
+            sh.descriptor.name(),
+            sh.force.map_or(String::new(), |f| format!(", force {f} N")),
+        );
+    }
+}
+
+/// The tensile tests' rows, and the notes on them in `info`.
+fn print_tensile(
+    data: &FabricDataset,
+    prep: &Result<kshell::fit::preprocess::Prepared, kshell::fit::FitError>,
+    info: &mut Vec<String>,
+) {
+    for (i, t) in data.tensile.iter().enumerate() {
+        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
+        let role = match t.role(false) {
+            kshell::dataset::Role::Fit => "fitted",
+            kshell::dataset::Role::Validation => "validation",
+        };
+        if t.role.is_none() && !t.is_fitted() {
+            info.push(format!(
+                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
+                t.angle_deg,
+                t.curve.display()
+            ));
+        }
+        let toe = match prep {
+            Ok(p) => p
+                .curves
+                .iter()
+                .find(|c| c.test == i)
+                .filter(|c| c.toe != 0.0)
+                .map(|c| {
+                    format!(
+                        ", toe {:.3} mm {}",
+                        c.toe * 1e3,
+                        if c.toe_auto { "detected" } else { "given" }
+                    )
+                })
+                .unwrap_or_default(),
+            Err(_) => String::new(),
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
+            "tensile",
+            t.angle_deg,
+            num(t.width * 1e3),
+            num(t.gauge_length * 1e3),
+            t.elongation.len(),
+            cell(max_elong * 1e3, 4),
+            cell(max_force, 4),
+            t.curve.display()
+        );
+    }
+}
+
+/// The bend tests' rows, and the note on the bending model in `info`.
+fn print_bends(data: &FabricDataset, info: &mut Vec<String>) {
+    let own_bending = data.bend.iter().any(|b| b.angle_deg == 90.0)
+        && data.bend.iter().any(|b| b.angle_deg == 0.0);
+    if own_bending {
+        info.push(
+            "bending: warp and weft bends present: fit fits their flexural rigidities of their own (the default; --bending paper fits one thickness instead)".into(),
+        );
+    }
+    for b in &data.bend {
+        let role = if own_bending {
+            "fitted: bending rigidity"
+        } else if data.known.thickness.is_some() {
+            "predicted: thickness known"
+        } else {
+            "fitted"
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
+            "bend",
+            b.angle_deg,
+            num(b.width * 1e3),
+            num(b.overhang * 1e3),
+            "-",
+            "-",
+            "-",
+            b.drape_angle_deg
+        );
+    }
 }

@@ -151,7 +151,7 @@ pub struct FitArgs {
     /// its shear stage fits the yarn and shear terms together).
     #[arg(long, value_enum, default_value_t = FitOptions::default().joint)]
     joint: kshell::fit::Joint,
-    #[arg(long, default_value = "kl",
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL,
         help = model_help(", fitted in Miguel et al. 2012's staged order on strips 8 cells (16 triangles) across (default output <dataset name>-<model>-fit.toml; the options above other than -o, --quiet, --max-error and --allow-outside are the shell's)"))]
     model: String,
 }

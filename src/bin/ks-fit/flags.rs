@@ -43,6 +43,9 @@ pub fn model_help(context: &str) -> String {
     )
 }
 
+/// `--model`'s default, the subdivision shell (also the batch manifest's empty `model` cell).
+pub const DEFAULT_MODEL: &str = "kl";
+
 /// The cloth model a command runs, from `--model` (checked where the command starts, so that
 /// an unknown model reads `--model: unknown model …` like every other user error).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,7 +60,7 @@ impl Model {
     /// `--model`'s value, or the error naming the flag.
     pub fn parse(s: &str) -> Result<Model, String> {
         match s {
-            "kl" => Ok(Model::Kl),
+            DEFAULT_MODEL => Ok(Model::Kl),
             m => m.parse().map(Model::Tri).map_err(|e| format!("--model: {e}")),
         }
     }

@@ -222,19 +222,9 @@ fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
     }
 }
 
-fn main() -> ExitCode {
-    let cli = Cli::parse();
-    kshell::solve::deterministic_factorizations();
-    let force = cli.force;
-    kshell::limits::set_max_faces(cli.max_faces);
-    let draws = matches!(
-        cli.command,
-        Command::Render { .. } | Command::Scene { .. } | Command::Fit(_)
-    );
-    if draws {
-        render::quiet_driver_warnings();
-    }
-    let result = match cli.command {
+/// Runs one command; `Ok(false)` when it ran but failed its check (exit code 3).
+fn run(command: Command, force: bool) -> Result<bool, String> {
+    match command {
         Command::Mesh {
             file,
             limit,
@@ -289,7 +279,21 @@ fn main() -> ExitCode {
         Command::Batch(args) => batch::cmd_batch(&args),
         Command::Fit(args) => fit::run(&args, force),
         Command::Synth(args) => synth::run(&args, force).map(|()| true),
-    };
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    kshell::solve::deterministic_factorizations();
+    kshell::limits::set_max_faces(cli.max_faces);
+    let draws = matches!(
+        cli.command,
+        Command::Render { .. } | Command::Scene { .. } | Command::Fit(_)
+    );
+    if draws {
+        render::quiet_driver_warnings();
+    }
+    let result = run(cli.command, cli.force);
     if draws {
         render::cleanup_driver_folder();
     }

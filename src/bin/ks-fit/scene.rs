@@ -44,7 +44,7 @@ pub struct SceneArgs {
     plain_newton: bool,
     #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = strategy_help(": how a cantilever's weight is brought on"))]
     strategy: kshell::solve::Strategy,
-    #[arg(long, default_value = "kl", help = model_help("; a triangle model reads the material file's [model] table, or converts the shell law's zero-strain moduli"))]
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL, help = model_help("; a triangle model reads the material file's [model] table, or converts the shell law's zero-strain moduli"))]
     pub model: String,
 }
 

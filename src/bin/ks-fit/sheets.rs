@@ -44,7 +44,7 @@ pub struct ShowArgs {
     seed: u64,
     #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = crate::flags::strategy_help(" of every equilibrium (the load brought on is only the drape's weight; see the stability atlas)"))]
     strategy: kshell::solve::Strategy,
-    #[arg(long, default_value = "kl", help = crate::flags::model_help("; a triangle model on the same sheet as a grid of n × n cells split by one diagonal, with the file's [model] table or the shell law converted at each mesh's cell size"))]
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL, help = crate::flags::model_help("; a triangle model on the same sheet as a grid of n × n cells split by one diagonal, with the file's [model] table or the shell law converted at each mesh's cell size"))]
     model: String,
     /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
     /// is reported anyway).

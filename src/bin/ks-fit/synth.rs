@@ -49,7 +49,7 @@ pub struct SynthArgs {
     #[arg(long, default_value = SynthOptions::default().yarn_rule.name(),
         help = yarn_rule_help("; the strips only: the cantilevers always use the full rule"))]
     yarn_rule: kshell::assembly::YarnRule,
-    #[arg(long, default_value = "kl",
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL,
         help = model_help(" that the virtual lab runs, from the file's [model] table or converted from its shell law: data another discretisation made, to fit with any model; triangle strips use --mesh and no grading"))]
     model: String,
 }
@@ -125,12 +125,12 @@ fn cmd_synth(
     opts: &SynthOptions,
     force: bool,
 ) -> Result<(), String> {
-    if model != "kl" && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
+    if model != crate::flags::DEFAULT_MODEL && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
         return Err(format!(
             "--grading applies to the kl model's strip cage, not to --model {model}"
         ));
     }
-    if model != "kl" && opts.yarn_rule != kshell::assembly::YarnRule::Auto {
+    if model != crate::flags::DEFAULT_MODEL && opts.yarn_rule != kshell::assembly::YarnRule::Auto {
         return Err(format!(
             "--yarn-rule applies to the kl model's limit surface, not to --model {model}"
         ));
