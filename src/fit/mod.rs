@@ -66,8 +66,8 @@ use joint::StageSets;
 use stages::StageMode;
 mod surrogate;
 mod thickness;
-pub mod tri;
 mod tolerances;
+pub mod tri;
 pub mod uncertainty;
 mod validation;
 pub mod verdict;
@@ -79,7 +79,9 @@ pub use bending::BendingMode;
 use map::{A12Rule, Direction, StageMap};
 use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
 pub use measures::{Misfit, Objective};
-pub use mesh_check::{MeshCheck, MeshCheckMode, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL};
+pub use mesh_check::{
+    MeshCheck, MeshCheckMode, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL,
+};
 pub use options::{FitOptions, MAX_DEGREE, MAX_MISALIGN_DEG, NODES_RANGE};
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};

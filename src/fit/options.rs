@@ -3,8 +3,8 @@
 
 use super::coupling;
 use super::optim::Method;
-use super::{BendingMode, Joint, Objective, RepeatMode, TestMeshes, ToeMode};
 use super::MeshCheckMode;
+use super::{BendingMode, Joint, Objective, RepeatMode, TestMeshes, ToeMode};
 
 /// Settings of `ks-fit fit`.
 #[derive(Clone, Debug)]

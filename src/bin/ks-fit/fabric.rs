@@ -2,9 +2,9 @@
 //! (what a dataset holds and what `fit` will do with it).
 
 use crate::guard::Guard;
-use kshell::io::{cell, num};
 use kshell::dataset::FabricDataset;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
+use kshell::io::{cell, num};
 use std::path::{Path, PathBuf};
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.

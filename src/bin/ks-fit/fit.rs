@@ -21,7 +21,7 @@ fn pct(x: f64) -> String {
 
 fn mesh_ladder_help() -> String {
     format!(
-        "Meshes of a 50 × 75 mm strip, coarse to fine (other strips keep the element size). Where a level doubles the last, the last fit is solved on it first and the level is skipped (with the rest) when refitting would change no determined parameter by {} % and no curve by {} % (the mesh check's rule); other levels are skipped when they change the last fit's forces by under {} %. A stage the refinement leaves unchanged (under 0.1 %) is not refitted. The default stops at 16x24, where the mesh check finds about 1 % on graded cages; add 32x48 for a fit that meets the {} % rule everywhere, at about twice the time.",
+        "Meshes of a 50 × 75 mm strip, coarse to fine (other strips keep the element size). Where a level doubles the last, the last fit is solved on it first and the level is skipped (with the rest) when refitting would change no determined parameter by {} % and no curve by {} % (the mesh check's rule); other levels are skipped when they change the last fit's forces by under {} %. A stage the refinement leaves unchanged (under 0.1 %) is not refitted. The default stops at 16x24, where the mesh check finds about 1 % on graded cages; add 32x48 for a fit that meets the {} % rule everywhere, at about twice the time",
         pct(MESH_PARAM_TOL),
         pct(MESH_CURVE_TOL),
         pct(FitOptions::default().skip_tol),
@@ -32,13 +32,13 @@ fn mesh_ladder_help() -> String {
 fn test_meshes_help() -> String {
     let (p, c, a) = (pct(MESH_PARAM_TOL), pct(MESH_CURVE_TOL), MESH_ANGLE_TOL_DEG);
     format!(
-        "Each test's mesh: `strict` (after the ladder, every strip whose estimated mesh error is above a third of its fit error and {c} % is refined, faces doubled across and along, at most {REFINE_DOUBLINGS} times and to {REFINE_MAX_FACES} faces, and its stage refitted; so is a stage's strip with the largest estimated mesh error where the mesh check would move the stage by {p} % or more, the strip of a fitted curve that the check moves by {c} % or more, and the bends where it would move a thickness or rigidity by {p} % or a drape angle by {a}°), `own` (as `strict` but a curve moving by {c} % alone is reported, not refined: faster where such a strip wrinkles; paper_repro/fit_speed/strict.md compares the two) or `ladder` (every strip on the ladder's last level). `[[fit.test]]` mesh names each test's real mesh."
+        "Each test's mesh: `strict` (after the ladder, every strip whose estimated mesh error is above a third of its fit error and {c} % is refined, faces doubled across and along, at most {REFINE_DOUBLINGS} times and to {REFINE_MAX_FACES} faces, and its stage refitted; so is a stage's strip with the largest estimated mesh error where the mesh check would move the stage by {p} % or more, the strip of a fitted curve that the check moves by {c} % or more, and the bends where it would move a thickness or rigidity by {p} % or a drape angle by {a}°), `own` (as `strict` but a curve moving by {c} % alone is reported, not refined: faster where such a strip wrinkles; paper_repro/fit_speed/strict.md compares the two) or `ladder` (every strip on the ladder's last level). `[[fit.test]]` mesh names each test's real mesh"
     )
 }
 
 fn nodes_help() -> String {
     format!(
-        "Elongation nodes per strip at which the model is solved (interpolated between by local quintics), {} to {}; a strip with no more distinct measured elongations than this is solved at them.",
+        "Elongation nodes per strip at which the model is solved (interpolated between by local quintics), {} to {}; a strip with no more distinct measured elongations than this is solved at them",
         NODES_RANGE.0, NODES_RANGE.1
     )
 }
@@ -64,7 +64,7 @@ pub struct FitArgs {
     #[command(flatten)]
     image: crate::render::ImageArgs,
     #[arg(long, default_value_t = FitOptions::default().max_degree,
-        help = format!("Highest polynomial degree of each η tried (lowest first), 1 to {MAX_DEGREE}."))]
+        help = format!("Highest polynomial degree of each η tried (lowest first), 1 to {MAX_DEGREE}"))]
     max_degree: usize,
     /// Use exactly this degree for every η rather than choosing (for comparisons). Each
     /// raised degree is fitted whatever its start finds; a law that comes out implausible
@@ -94,12 +94,12 @@ pub struct FitArgs {
     #[arg(long, value_enum, default_value_t = FitOptions::default().repeats)]
     repeat: kshell::fit::RepeatMode,
     #[arg(long, default_value_t = FitOptions::default().max_misalign_deg,
-        help = format!("Bound of the misalignment diagnostic of validation runs, degrees in [0, {MAX_MISALIGN_DEG}] (0: off). The reported error is always the one at the nominal angle."))]
+        help = format!("Bound of the misalignment diagnostic of validation runs, degrees in [0, {MAX_MISALIGN_DEG}] (0: off). The reported error is always the one at the nominal angle"))]
     max_misalign: f64,
     #[arg(long, default_value_t = FitOptions::default().nodes, help = nodes_help())]
     nodes: usize,
     #[arg(long, default_value_t = 100.0 * FitOptions::default().max_error,
-        help = format!("Largest acceptable error of a fitted test, percent in (0, {MAX_ERROR_PERCENT}] (mean |relative error| of a curve, relative drape-angle error of a bend). Above it the fit still writes the material and report, prints FIT FAILED and exits with code 3."))]
+        help = format!("Largest acceptable error of a fitted test, percent in (0, {MAX_ERROR_PERCENT}] (mean |relative error| of a curve, relative drape-angle error of a bend). Above it the fit still writes the material and report, prints FIT FAILED and exits with code 3"))]
     max_error: f64,
     /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
     #[arg(long)]
@@ -191,8 +191,8 @@ fn fit_options(a: &FitArgs) -> Result<FitOptions, String> {
             NODES_RANGE.0, NODES_RANGE.1, a.nodes
         ));
     }
-    let ladder =
-        kshell::converge::parse_ladder(&a.mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
+    let ladder = kshell::converge::parse_ladder(&a.mesh_ladder)
+        .map_err(|e| format!("--mesh-ladder: {e}"))?;
     kshell::converge::check_ladder(&ladder, false).map_err(|e| format!("--mesh-ladder: {e}"))?;
     Ok(FitOptions {
         max_degree,
@@ -225,7 +225,15 @@ pub fn run(a: &FitArgs, force: bool) -> Result<bool, String> {
         let max_error = max_error_fraction(a.max_error)?;
         if let Model::Tri(kind) = model? {
             let o = a.output.as_deref();
-            return crate::models::fit(&a.file, o, kind, a.quiet, force, a.allow_outside, max_error);
+            return crate::models::fit(
+                &a.file,
+                o,
+                kind,
+                a.quiet,
+                force,
+                a.allow_outside,
+                max_error,
+            );
         }
     }
     let opts = fit_options(a)?;

@@ -8,14 +8,14 @@ use kshell::tri::TriKind;
 /// `--yarn-rule`: how the yarn terms are integrated; `context` ends the sentence.
 pub fn yarn_rule_help(context: &str) -> String {
     format!(
-        "How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per face), centre (also `center`; one point per face: a membrane that does not lock when the yarns are nearly inextensible and cross the cage) or auto (centre above a yarn-to-shear ratio max(a11, a22)/G12 of {CENTRE_FROM_RATIO}, below which the two are the same{context})."
+        "How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per face), centre (also `center`; one point per face: a membrane that does not lock when the yarns are nearly inextensible and cross the cage) or auto (centre above a yarn-to-shear ratio max(a11, a22)/G12 of {CENTRE_FROM_RATIO}, below which the two are the same{context})"
     )
 }
 
 /// `--grading`: the strip cage's grading; `context` ends the sentence.
 pub fn grading_help(context: &str) -> String {
     format!(
-        "Strip cage grading towards the free edges and the jaws, \"across,along\", each in [0, 1): edge cells (1 − a)/(1 + a) of the middle ones (0: uniform; {} makes a bias strip's force 4–6 times more accurate on the same mesh, at order 2 where uniform cages converge at 1.2){context}.",
+        "Strip cage grading towards the free edges and the jaws, \"across,along\", each in [0, 1): edge cells (1 − a)/(1 + a) of the middle ones (0: uniform; {} makes a bias strip's force 4–6 times more accurate on the same mesh, at order 2 where uniform cages converge at 1.2){context}",
         kshell::scene::STRIP_GRADING
     )
 }
@@ -23,14 +23,14 @@ pub fn grading_help(context: &str) -> String {
 /// `--strategy`: how each equilibrium is solved and its load brought on.
 pub fn strategy_help(context: &str) -> String {
     format!(
-        "Solver strategy{context}: `full-step` (the whole load by full-step Newton first, the ramp if that fails), `ramp` (load steps from 1/8, each solve line-searched), `trust-region` (every solve by trust-region Newton on the factorised Hessian, the whole load first) or `adaptive` (load steps sized from the predictor's error); each Newton solve has the energy line search and the backward-Euler fallback."
+        "Solver strategy{context}: `full-step` (the whole load by full-step Newton first, the ramp if that fails), `ramp` (load steps from 1/8, each solve line-searched), `trust-region` (every solve by trust-region Newton on the factorised Hessian, the whole load first) or `adaptive` (load steps sized from the predictor's error); each Newton solve has the energy line search and the backward-Euler fallback"
     )
 }
 
 /// `--boundary`: the limit surface's boundary treatment; `context` ends the sentence.
 pub fn boundary_help(context: &str) -> String {
     format!(
-        "Boundary treatment of the limit surface: `phantom` (extrapolated rows) or `ghost` (ghost control points){context}."
+        "Boundary treatment of the limit surface: `phantom` (extrapolated rows) or `ghost` (ghost control points){context}"
     )
 }
 
@@ -38,7 +38,7 @@ pub fn boundary_help(context: &str) -> String {
 pub fn model_help(context: &str) -> String {
     let tri: Vec<&str> = TriKind::ALL.iter().map(|(n, _)| *n).collect();
     format!(
-        "Cloth model: kl (the subdivision shell, Clyde et al. 2017) or a triangle model ({}: Miguel et al. 2012's three and Larionov et al. 2022's energy){context}.",
+        "Cloth model: kl (the subdivision shell, Clyde et al. 2017) or a triangle model ({}: Miguel et al. 2012's three and Larionov et al. 2022's energy){context}",
         tri.join(", ")
     )
 }
@@ -61,7 +61,10 @@ impl Model {
     pub fn parse(s: &str) -> Result<Model, String> {
         match s {
             DEFAULT_MODEL => Ok(Model::Kl),
-            m => m.parse().map(Model::Tri).map_err(|e| format!("--model: {e}")),
+            m => m
+                .parse()
+                .map(Model::Tri)
+                .map_err(|e| format!("--model: {e}")),
         }
     }
 }

@@ -4,9 +4,9 @@
 
 use crate::auto::auto_bend;
 use crate::scene::{describe, unstable_error, SceneArgs};
-use kshell::tri::file::{load_tri, TriSource};
-use kshell::scene::{TriCantilever, TriTensile};
 use kshell::fit::tri::TriFit;
+use kshell::scene::{TriCantilever, TriTensile};
+use kshell::tri::file::{load_tri, TriSource};
 use kshell::tri::TriKind;
 use std::path::Path;
 

@@ -17,6 +17,9 @@ const MAX_FIT_BYTES: u64 = 16 << 20;
 /// 0.36 % from the 48² one (`paper_repro/models/results.md`).
 const DRAPE_BRANCH_SPREAD: f64 = 0.005;
 
+/// `--tol`'s default: the largest relative error against the converged shell accepted.
+const DEFAULT_TOL: f64 = 0.01;
+
 #[derive(clap::Args)]
 pub struct RecommendArgs {
     /// The shell material (TOML): the reference, and the triangle models' parameters where
@@ -30,7 +33,7 @@ pub struct RecommendArgs {
     #[arg(long, value_parser = ["tensile", "bend", "drape", "picture-frame", "corner-pull"])]
     scene: String,
     /// Largest relative error against the converged shell accepted.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = DEFAULT_TOL)]
     tol: f64,
     /// Cut angle from the weft, degrees (90 warp).
     #[arg(long, default_value_t = 90.0, allow_negative_numbers = true)]
@@ -58,10 +61,10 @@ pub struct RecommendArgs {
     #[arg(long)]
     repeats: Option<usize>,
     /// Picture frame: final shear angle, degrees, within ±80 (as `scene picture-frame`).
-    #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = crate::sheets::FRAME_SHEAR_DEG, allow_negative_numbers = true)]
     shear_deg: f64,
     /// Corner pull: final stretch of the diagonal, percent (as `scene corner-pull`).
-    #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = crate::sheets::CORNER_STRETCH_PERCENT, allow_negative_numbers = true)]
     stretch: f64,
     /// The mesh ladder every model runs, coarse to fine, e.g. 8x12,16x24,32x48 (square for the
     /// sheet scenes; each twice as fine as the last, as Richardson's extrapolation of the

@@ -26,12 +26,7 @@ pub struct SceneArgs {
     pub grading: Option<kshell::mesh::Grading>,
     #[arg(long, default_value = YarnRule::default().name(), help = yarn_rule_help("; a cantilever's auto is always full"))]
     pub yarn_rule: kshell::assembly::YarnRule,
-    /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape
-    /// angle (default 0.05; three meshes of elements about 6.25 mm, then twice and four times
-    /// as fine), for `tensile` the relative force error over the curve (default 0.003, i.e.
-    /// 0.3 %; graded cages from 4 faces across, doubled until one passes). Each mesh's error
-    /// is estimated by Richardson extrapolation and the coarsest within it kept.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = tol_help())]
     pub tol: Option<f64>,
     /// Report each solve on stderr.
     #[arg(short, long)]
@@ -42,10 +37,19 @@ pub struct SceneArgs {
     /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
     #[arg(long)]
     plain_newton: bool,
-    #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = strategy_help(": how a cantilever's weight is brought on"))]
+    #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = strategy_help(" (for a cantilever: how its weight is brought on)"))]
     strategy: kshell::solve::Strategy,
     #[arg(long, default_value = crate::flags::DEFAULT_MODEL, help = model_help("; a triangle model reads the material file's [model] table, or converts the shell law's zero-strain moduli"))]
     pub model: String,
+}
+
+/// `--tol` of `tensile` and `bend`, with their defaults.
+fn tol_help() -> String {
+    use crate::auto::{BEND_TOL_DEG, TENSILE_TOL};
+    format!(
+        "Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape angle (default {BEND_TOL_DEG}; three meshes of elements about 6.25 mm, then twice and four times as fine), for `tensile` the relative force error over the curve (default {TENSILE_TOL}, i.e. {} %; graded cages from 4 faces across, doubled until one passes). Each mesh's error is estimated by Richardson extrapolation and the coarsest within it kept",
+        (TENSILE_TOL * 1e6).round() / 1e4
+    )
 }
 
 impl SceneArgs {
@@ -139,7 +143,7 @@ pub struct StudyArgs {
     plot: Option<PathBuf>,
     #[arg(long, help = boundary_help(" (default: the scene's own)"))]
     boundary: Option<BoundaryRule>,
-    #[arg(long, value_parser = crate::parse_grading, help = grading_help("; tensile studies, default 0: uniform"))]
+    #[arg(long, value_parser = crate::parse_grading, help = grading_help("; tensile studies; default uniform"))]
     grading: Option<kshell::mesh::Grading>,
     #[arg(long, default_value = YarnRule::default().name(), help = yarn_rule_help(""))]
     yarn_rule: kshell::assembly::YarnRule,

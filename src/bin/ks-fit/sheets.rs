@@ -15,6 +15,14 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// `picture-frame --shear-deg`'s default (also `recommend`'s): the final shear angle, degrees.
+pub const FRAME_SHEAR_DEG: f64 = 40.0;
+/// `corner-pull --stretch`'s default (also `recommend`'s): the diagonal's final stretch, %.
+pub const CORNER_STRETCH_PERCENT: f64 = 10.0;
+
+/// `--tol`'s default: the relative discretisation error the automatic mesh must meet.
+const SCENE_TOL: f64 = 0.01;
+
 /// Newton and backward-Euler iterations allowed per equilibrium solve of a showcase scene.
 const SCENE_ITERATIONS: usize = 500;
 
@@ -30,7 +38,7 @@ pub struct ShowArgs {
     out: Option<PathBuf>,
     /// Relative discretisation error the automatic mesh must meet (Richardson estimate over
     /// three meshes, each twice as fine as the last; the coarsest that meets it is kept).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = SCENE_TOL)]
     tol: f64,
     /// Force one mesh, faces each way ("16" or "16x16"; the sheets are square): no ladder.
     #[arg(long, value_parser = parse_square)]
@@ -72,7 +80,7 @@ pub enum ShowScene {
         #[command(flatten)]
         args: ShowArgs,
         /// Final shear angle, degrees.
-        #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = FRAME_SHEAR_DEG, allow_negative_numbers = true)]
         shear_deg: f64,
     },
     /// A 10 cm × 10 cm square pulled along one diagonal by 1 cm clips on two corners to
@@ -82,7 +90,7 @@ pub enum ShowScene {
         #[command(flatten)]
         args: ShowArgs,
         /// Final stretch of the diagonal, percent.
-        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = CORNER_STRETCH_PERCENT, allow_negative_numbers = true)]
         stretch: f64,
     },
 }

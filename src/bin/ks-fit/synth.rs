@@ -125,7 +125,9 @@ fn cmd_synth(
     opts: &SynthOptions,
     force: bool,
 ) -> Result<(), String> {
-    if model != crate::flags::DEFAULT_MODEL && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
+    if model != crate::flags::DEFAULT_MODEL
+        && (opts.grading.across != 0.0 || opts.grading.along != 0.0)
+    {
         return Err(format!(
             "--grading applies to the kl model's strip cage, not to --model {model}"
         ));

@@ -229,10 +229,7 @@ mod tests {
         for c in FIT_COLUMNS {
             let long = c.replace('_', "-");
             let flag = fit.get_arguments().find(|a| a.get_long() == Some(&long));
-            assert!(
-                flag.is_some_and(|a| a.get_action().takes_values()),
-                "{c}"
-            );
+            assert!(flag.is_some_and(|a| a.get_action().takes_values()), "{c}");
         }
     }
 
