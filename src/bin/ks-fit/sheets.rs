@@ -310,17 +310,10 @@ struct Choice {
     ladder: Vec<Level>,
 }
 
-pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
-    scene.check()?;
-    let a = scene.args();
-    let material = match Model::parse(&a.model)? {
-        Model::Kl => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
-        Model::Tri(kind) => {
-            SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
-        }
-    };
+/// Warns where the picture frame shears a shell past its law's measured range.
+fn warn_past_shear_cutoff(scene: &ShowScene, material: &SceneMaterial) {
     if let (ShowScene::PictureFrame { shear_deg, .. }, SceneMaterial::Shell(material)) =
-        (&scene, &material)
+        (scene, material)
     {
         // a sheet that follows the frame has Ẽ₁₂ = sin γ / 2 (wrinkles only relieve it)
         let e12 = shear_deg.to_radians().sin().abs() / 2.0;
@@ -331,6 +324,18 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
             );
         }
     }
+}
+
+pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
+    scene.check()?;
+    let a = scene.args();
+    let material = match Model::parse(&a.model)? {
+        Model::Kl => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
+        Model::Tri(kind) => {
+            SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
+        }
+    };
+    warn_past_shear_cutoff(&scene, &material);
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(scene.name()));
     let mut guard = Guard::new(force);
     guard.input(&a.material);
