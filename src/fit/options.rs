@@ -1,5 +1,6 @@
-//! The settings of `ks-fit fit` ([`FitOptions`]) and their defaults: the one place the
-//! command line, the batch manifest and `ks-fit check`'s preview read them from.
+//! The settings of `ks-fit fit` ([`FitOptions`]) and their defaults, with the bounds the
+//! command line checks them against: the one place the command line (and through it the batch
+//! manifest's option columns) and `ks-fit check`'s preview read them from.
 
 use super::coupling;
 use super::optim::Method;
