@@ -244,3 +244,28 @@ pub fn run(a: &FitArgs, force: bool) -> Result<bool, String> {
     let o = a.output.as_deref();
     crate::fabric::cmd_fit(&a.file, o, report, &opts, a.quiet, a.allow_outside, force)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    /// `ks-fit fit` without flags runs the library's default settings.
+    #[test]
+    fn the_flags_default_to_the_librarys_options() {
+        let cli = crate::Cli::try_parse_from(["ks-fit", "fit", "fabric.toml"]);
+        let Ok(crate::Cli {
+            command: crate::Command::Fit(args),
+            ..
+        }) = cli
+        else {
+            panic!("`ks-fit fit fabric.toml` does not parse");
+        };
+        let opts = fit_options(&args).map_err(|e| e.to_string());
+        assert_eq!(
+            opts.map(|o| format!("{o:?}")),
+            Ok(format!("{:?}", FitOptions::default()))
+        );
+        assert_eq!(Model::parse(&args.model), Ok(Model::Kl));
+    }
+}

@@ -182,3 +182,44 @@ fn cmd_synth(
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    /// `ks-fit synth` without options runs the library's default settings.
+    #[test]
+    fn the_flags_default_to_the_librarys_options() {
+        let cli = crate::Cli::try_parse_from(["ks-fit", "synth", "--material", "m", "--out", "o"]);
+        let Ok(crate::Cli {
+            command: crate::Command::Synth(a),
+            ..
+        }) = cli
+        else {
+            panic!("`ks-fit synth` does not parse");
+        };
+        let defaults = kshell::synth::SynthOptions::default();
+        assert_eq!(
+            (
+                a.max_strain,
+                a.points,
+                a.repeats,
+                a.noise,
+                a.misalign,
+                a.seed
+            ),
+            (
+                defaults.max_strain,
+                defaults.points,
+                defaults.repeats,
+                defaults.noise,
+                defaults.misalign_deg,
+                defaults.seed
+            )
+        );
+        assert_eq!(
+            (a.mesh, a.grading, a.yarn_rule),
+            (defaults.mesh, defaults.grading, defaults.yarn_rule)
+        );
+    }
+}
