@@ -206,9 +206,21 @@ fn predict_shapes(
     Ok(out)
 }
 
-pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
+/// The flags of `ks-fit check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// The dataset's fabric.toml.
+    file: PathBuf,
+    /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
+    #[arg(long)]
+    allow_outside: bool,
+}
+
+/// Runs `ks-fit check`.
+pub fn cmd_check(a: &CheckArgs) -> Result<(), String> {
+    let file = a.file.as_path();
     let (data, warnings) =
-        kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
+        kshell::dataset::load_dataset_with(file, a.allow_outside).map_err(|e| e.to_string())?;
     print_dataset(file, &data);
     println!(
         "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",

@@ -173,13 +173,7 @@ enum Command {
     Fit(fit::FitArgs),
     /// Check a fabric dataset (fabric.toml and its CSV curves): print a summary of every test
     /// and what the fit will do with it, then any warnings; exit 2 on an error.
-    Check {
-        /// The dataset's fabric.toml.
-        file: PathBuf,
-        /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
-        #[arg(long)]
-        allow_outside: bool,
-    },
+    Check(fabric::CheckArgs),
     /// Write a synthetic dataset from a material through the virtual lab: tensile strips at
     /// 90, 0, 45, 22.5 and 67.5 degrees, and the warp and weft cantilevers at 41.5 degrees.
     Synth(synth::SynthArgs),
@@ -272,10 +266,7 @@ fn run(command: Command, force: bool) -> Result<bool, String> {
         } => render::cmd_render(&files, &out, columns, &image, force).map(|()| true),
         Command::Recommend { args } => recommend::cmd_recommend(&args),
         Command::Demo => cmd_demo().map(|()| true),
-        Command::Check {
-            file,
-            allow_outside,
-        } => cmd_check(&file, allow_outside).map(|()| true),
+        Command::Check(args) => cmd_check(&args).map(|()| true),
         Command::Batch(args) => batch::cmd_batch(&args),
         Command::Fit(args) => fit::run(&args, force),
         Command::Synth(args) => synth::run(&args, force).map(|()| true),
