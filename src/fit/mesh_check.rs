@@ -27,6 +27,14 @@ use crate::material::BendingRigidity;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
+/// A mesh-independent fit moves no determined parameter by this much (relative) or more on
+/// the finer mesh: 1 %.
+pub const MESH_PARAM_TOL: f64 = 0.01;
+/// ... and no fitted curve by this much (mean relative force change) or more: 0.3 %.
+pub const MESH_CURVE_TOL: f64 = 3e-3;
+/// ... and no drape angle by this many degrees or more: 0.1°.
+pub const MESH_ANGLE_TOL_DEG: f64 = 0.1;
+
 /// Where the check solves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum MeshCheckMode {
@@ -197,9 +205,9 @@ impl MeshCheck {
     /// The criterion of a mesh-independent fit: no determined parameter moves by 1 %, no
     /// fitted curve by 0.3 %, no drape angle by 0.1°.
     pub fn passes(&self) -> bool {
-        self.change < 0.01
-            && self.curve_change < 3e-3
-            && self.angle_change_deg.is_none_or(|a| a < 0.1)
+        self.change < MESH_PARAM_TOL
+            && self.curve_change < MESH_CURVE_TOL
+            && self.angle_change_deg.is_none_or(|a| a < MESH_ANGLE_TOL_DEG)
     }
 
     /// The largest change of a stage's determined quantities (its stiffness and its law's
@@ -481,7 +489,7 @@ impl Fitter<'_> {
     /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
     pub(super) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
         let bad = !m.passes();
-        let law = if m.law_change >= 0.01 {
+        let law = if m.law_change >= MESH_PARAM_TOL {
             format!(
                 "; η's weights and exponents (and a coupling's factors) one by one by up to {:.0} % ({}), which the curves do not pin down",
                 100.0 * m.law_change,
@@ -523,8 +531,8 @@ impl Fitter<'_> {
             if m.curve.is_empty() { "-" } else { &m.curve },
         );
         // a curve alone failing, where `own` meshes left it: the strict rule refines its strip
-        let curve_only = m.change < 0.01
-            && m.angle_change_deg.is_none_or(|a| a < 0.1)
+        let curve_only = m.change < MESH_PARAM_TOL
+            && m.angle_change_deg.is_none_or(|a| a < MESH_ANGLE_TOL_DEG)
             && self.opts.test_meshes == super::TestMeshes::Own;
         let line = if bad && curve_only {
             format!("{line}: the fit is not mesh-independent; --test-meshes strict refines the strip of that curve (or add the finer level, --mesh-ladder)")

@@ -53,6 +53,7 @@ pub mod map;
 mod measures;
 mod mesh_check;
 pub mod optim;
+mod options;
 mod pipeline;
 pub mod plausible;
 pub mod preprocess;
@@ -80,12 +81,14 @@ pub use bending::BendingMode;
 use map::{A12Rule, Direction};
 use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
 pub use measures::{Misfit, Objective};
-pub use mesh_check::{MeshCheck, MeshCheckMode};
-use optim::Method;
+pub use mesh_check::{
+    MeshCheck, MeshCheckMode, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL,
+};
+pub use options::{FitOptions, MAX_DEGREE, MAX_MISALIGN_DEG, NODES_RANGE};
 pub use pipeline::fit;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
-pub use refine::TestMeshes;
+pub use refine::{TestMeshes, MAX_DOUBLINGS as REFINE_DOUBLINGS, MAX_FACES as REFINE_MAX_FACES};
 use std::{collections::HashMap, time::Instant};
 use tolerances::{FIT_RTOL, NEAR_ANGLE_DEG, POLISH_XTOL, TRIAL_RETRY_ITERATIONS};
 
@@ -96,97 +99,6 @@ pub enum FitError {
     Data(String),
     #[error("{stage}: {source}")]
     Scene { stage: String, source: SceneError },
-}
-
-/// Settings of `ks-fit fit`.
-#[derive(Clone, Debug)]
-pub struct FitOptions {
-    /// Highest degree of each η tried.
-    pub max_degree: usize,
-    /// Use exactly this degree for every η (no automatic choice), for comparisons.
-    pub fixed_degree: Option<usize>,
-    /// Meshes of a 50 × 75 mm strip, coarse to fine; other strips keep the element size.
-    pub ladder: Vec<(usize, usize)>,
-    pub method: Method,
-    /// Skip a finer level when it changes the fitted forces by less than this, mean relative
-    /// (solved, for the second level); later levels are estimated from the last change at
-    /// the mesh check's order (`mesh_check::order`) and judged by its 1 % / 0.3 % rule.
-    /// Default 1 %: below the repeat-to-repeat scatter of real tests and the paper's fit
-    /// errors (Table 3: 1–5 %).
-    pub skip_tol: f64,
-    /// A degree is raised only if that lowers the mean relative error by at least this factor.
-    pub degree_gain: f64,
-    /// Mean relative error below which a degree fits (no higher degree is tried).
-    pub degree_good: f64,
-    /// Elongation nodes per strip at which the model is solved.
-    pub nodes: usize,
-    /// A stage stops once its rms relative error is below this, or when an iteration lowers
-    /// the objective by less than `rel_decrease`.
-    pub fit_tol: f64,
-    pub rel_decrease: f64,
-    pub max_iterations: usize,
-    /// The paper's protocol: 0°, 45° and 90° fitted, other angles validation (default: every
-    /// angle fitted unless its `role` says otherwise).
-    pub paper_protocol: bool,
-    pub repeats: RepeatMode,
-    pub toe: ToeMode,
-    /// Bound of the validation runs' misalignment diagnostic, degrees (0: off).
-    pub max_misalign_deg: f64,
-    /// A fitted test whose error exceeds this (mean relative) fails the fit: see [`verdict`].
-    pub max_error: f64,
-    /// How every strip and cantilever solve of the fit is globalised and its load brought on.
-    pub strategy: crate::solve::Strategy,
-    /// Bending of its own (fitted rigidities) or the paper's one thickness.
-    pub bending: BendingMode,
-    /// Estimate how much refining the last mesh level once more would change the fit
-    /// ([`MeshCheck`]): one solve of every fitted test on a coarser or the finer mesh.
-    pub mesh_check: MeshCheckMode,
-    /// Cage grading of every strip ([`crate::scene::STRIP_GRADING`] by default: the bias
-    /// strips' forces converge at order 2 on it, 1.2 on uniform cages).
-    pub grading: crate::mesh::Grading,
-    /// Each strip refined on its own until its mesh error meets its tolerance, or every strip
-    /// on the ladder's level ([`TestMeshes`]).
-    pub test_meshes: TestMeshes,
-    /// How every solve integrates the yarn terms (`Auto`: decided once after the bootstrap).
-    pub yarn_rule: crate::assembly::YarnRule,
-    /// Whether the shear stage also fits the tension–shear coupling ([`coupling`]).
-    pub shear_coupling: coupling::CouplingMode,
-    /// How a point's misfit enters the tensile stages' objective ([`Objective`]).
-    pub objective: Objective,
-    /// Whether the yarn stages also see the off-axis strips ([`Joint`]).
-    pub joint: Joint,
-}
-
-impl Default for FitOptions {
-    fn default() -> Self {
-        Self {
-            max_degree: 3,
-            fixed_degree: None,
-            ladder: vec![(8, 12), (16, 24)],
-            method: Method::Hybrid,
-            skip_tol: 1e-2,
-            degree_gain: 0.7,
-            degree_good: 2e-3,
-            nodes: 9,
-            fit_tol: 1e-3,
-            rel_decrease: 1e-2,
-            max_iterations: 25,
-            paper_protocol: false,
-            repeats: RepeatMode::All,
-            toe: ToeMode::Auto,
-            max_misalign_deg: 2.0,
-            strategy: crate::solve::Strategy::default(),
-            max_error: 0.10,
-            bending: BendingMode::Auto,
-            mesh_check: MeshCheckMode::default(),
-            grading: crate::scene::STRIP_GRADING,
-            test_meshes: TestMeshes::Strict,
-            yarn_rule: crate::assembly::YarnRule::Auto,
-            shear_coupling: coupling::CouplingMode::Auto,
-            objective: Objective::Auto,
-            joint: Joint::Auto,
-        }
-    }
 }
 
 /// One test's outcome.

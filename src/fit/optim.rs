@@ -48,6 +48,17 @@ pub enum Method {
     GaussNewton,
 }
 
+impl Method {
+    /// The spelling `--method` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bfgs => "bfgs",
+            Self::Hybrid => "hybrid",
+            Self::GaussNewton => "gauss-newton",
+        }
+    }
+}
+
 impl std::str::FromStr for Method {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {

@@ -28,7 +28,7 @@
 //! solved, so each round costs one solve per refined strip plus the refits.
 
 use super::map::StageMap;
-use super::mesh_check::MeshCheck;
+use super::mesh_check::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL};
 use super::rigs::strip_mesh;
 use super::{mean_abs_finite, FitError, Fitter, StageMode};
 use std::time::Instant;
@@ -60,14 +60,14 @@ impl TestMeshes {
 }
 
 /// The most times one strip's mesh is doubled beyond the ladder's last level.
-pub(super) const MAX_DOUBLINGS: u32 = 3;
+pub const MAX_DOUBLINGS: u32 = 3;
 /// A strip is not refined past this many faces: a 64 × 96 cage, the standard 50 × 75 mm strip
 /// doubled twice from the 16 × 24 level (2.7 s a point, against 0.4 s on 32 × 48: the skewed
 /// fabric of `paper_repro/off_axis` at 60°, 2 cores). A cap at 64 × 64 (4096) would stop that
 /// strip on 32 × 48 with its curve moving by 0.48–0.49 % in the mesh check.
-pub(super) const MAX_FACES: usize = 6144;
+pub const MAX_FACES: usize = 6144;
 /// The floor of a test's mesh tolerance (0.3 %, the mesh check's curve criterion).
-pub(super) const MESH_FLOOR: f64 = 3e-3;
+pub(super) const MESH_FLOOR: f64 = MESH_CURVE_TOL;
 
 /// The tolerance a curve's estimated mesh error must meet: a third of its fit error, and no
 /// less than 0.3 %.
@@ -210,7 +210,7 @@ pub(super) fn refine_for_check(
         // strip usually carries the change: the 45° one for the shear; the check then says
         // whether the next is needed)
         let moved = check.stage_change(maps[k].dir);
-        if moved >= 0.01 && moved.is_finite() {
+        if moved >= MESH_PARAM_TOL && moved.is_finite() {
             let worst = strips
                 .iter()
                 .copied()
@@ -252,7 +252,8 @@ pub(super) fn refine_for_check(
         .map(|(_, c)| c.abs())
         .fold(0.0, f64::max);
     let angle_moved = check.angle_change_deg.unwrap_or(0.0);
-    let bends = (bend_moved >= 0.01 || angle_moved >= 0.1) && f.may_refine_bends(last);
+    let bends = (bend_moved >= MESH_PARAM_TOL || angle_moved >= MESH_ANGLE_TOL_DEG)
+        && f.may_refine_bends(last);
     if todo.is_empty() && !bends {
         return Ok(false);
     }

@@ -29,6 +29,13 @@ pub struct Grading {
     pub along: f64,
 }
 
+/// "across,along", as `--grading` takes it.
+impl std::fmt::Display for Grading {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "{},{}", self.across, self.along)
+    }
+}
+
 impl Grading {
     pub const UNIFORM: Self = Self {
         across: 0.0,

@@ -1,74 +1,11 @@
-//! The fabric commands of `ks-fit`: `fit` (a dataset to a material), `check` (what a dataset
-//! holds and what `fit` will do with it) and `synth` (a dataset from a material).
+//! The fabric commands of `ks-fit`: `fit` on the shell (a dataset to a material) and `check`
+//! (what a dataset holds and what `fit` will do with it).
 
 use crate::guard::Guard;
+use kshell::dataset::FabricDataset;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use kshell::io::{cell, num};
-use kshell::material::load_material;
 use std::path::{Path, PathBuf};
-
-/// Highest degree of an η the fit accepts (each degree adds two parameters per direction).
-const MAX_DEGREE: usize = 8;
-
-/// The fit's settings from its flags, checked.
-#[allow(clippy::too_many_arguments)]
-pub fn fit_options(
-    max_degree: usize,
-    fixed_degree: Option<usize>,
-    mesh_ladder: &str,
-    method: kshell::fit::optim::Method,
-    protocol: &str,
-    toe: kshell::fit::ToeMode,
-    repeats: kshell::fit::RepeatMode,
-    max_misalign: f64,
-    nodes: usize,
-    max_error_percent: f64,
-) -> Result<kshell::fit::FitOptions, String> {
-    let max_error = max_error_fraction(max_error_percent)?;
-    if max_degree == 0 || fixed_degree == Some(0) {
-        return Err("degrees start at 1 (--max-degree, --degree)".into());
-    }
-    if max_degree > MAX_DEGREE || fixed_degree.is_some_and(|d| d > MAX_DEGREE) {
-        return Err(format!(
-            "degrees go up to {MAX_DEGREE} (--max-degree, --degree; the paper needed at most 5)"
-        ));
-    }
-    if !(0.0..=15.0).contains(&max_misalign) {
-        return Err(format!(
-            "--max-misalign must be in [0, 15] degrees, got {max_misalign:?}"
-        ));
-    }
-    if !(4..=200).contains(&nodes) {
-        return Err(format!("--nodes must be in [4, 200], got {nodes}"));
-    }
-    let ladder =
-        kshell::converge::parse_ladder(mesh_ladder).map_err(|e| format!("--mesh-ladder: {e}"))?;
-    kshell::converge::check_ladder(&ladder, false).map_err(|e| format!("--mesh-ladder: {e}"))?;
-    Ok(kshell::fit::FitOptions {
-        max_degree,
-        fixed_degree,
-        ladder,
-        method,
-        paper_protocol: protocol == "paper",
-        toe,
-        repeats,
-        max_misalign_deg: max_misalign,
-        nodes,
-        max_error,
-        ..kshell::fit::FitOptions::default()
-    })
-}
-
-/// `--max-error` (a percentage in (0, 1000]) as a fraction.
-pub fn max_error_fraction(percent: f64) -> Result<f64, String> {
-    if percent.is_finite() && percent > 0.0 && percent <= 1000.0 {
-        Ok(percent / 100.0)
-    } else {
-        Err(format!(
-            "--max-error must be a percentage in (0, 1000], got {percent:?}"
-        ))
-    }
-}
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.
 fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
@@ -80,8 +17,6 @@ fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
     })
 }
 
-/// Runs `ks-fit fit`; `Ok(false)` when the fit missed `--max-error` on a fitted test (the
-/// material and report are written all the same).
 /// Where `--report` goes and whether it draws the scenes.
 pub struct ReportArgs<'a> {
     pub dir: &'a Path,
@@ -89,6 +24,8 @@ pub struct ReportArgs<'a> {
     pub scenes: Option<&'a crate::render::ImageArgs>,
 }
 
+/// Runs `ks-fit fit` on the shell; `Ok(false)` when the fit missed `--max-error` on a fitted
+/// test (the material and report are written all the same).
 pub fn cmd_fit(
     file: &Path,
     output: Option<&Path>,
@@ -145,28 +82,50 @@ pub fn cmd_fit(
     kshell::io::write_atomic(&out, text)
         .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     if let Some(r) = &report {
-        let dir = r.dir;
-        progress("writing the report (CSV and SVG of every test, index.html)");
-        let mut files = fit_report::write_report(&result, dir)
-            .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
-        let (figures, notes) = match r.scenes {
-            Some(args) => crate::sheets::report_figures(&result.material, args, &mut progress),
-            None => (Vec::new(), Vec::new()),
-        };
-        for n in &notes {
-            eprintln!("ks-fit: fit: {n}");
-        }
-        let page = kshell::fit::html::fit_html(&result, &file.display().to_string(), &figures);
-        let index = dir.join("index.html");
-        kshell::io::write_atomic(&index, page)
-            .map_err(|e| format!("cannot write {}: {e}", index.display()))?;
-        files.push(index.display().to_string());
-        progress(&format!(
-            "report: {} files in {}",
-            files.len(),
-            dir.display()
-        ));
+        write_fit_report(&result, r, file, &mut progress)?;
     }
+    print_fit(&result, quiet);
+    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
+    crate::models::print_shape_rows(&rows);
+    println!("wrote {}", out.display());
+    Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
+}
+
+/// Writes `--report`: the CSV and SVG of every test, the scenes where asked, index.html.
+fn write_fit_report(
+    result: &kshell::fit::FitResult,
+    r: &ReportArgs,
+    file: &Path,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(), String> {
+    use kshell::fit::report as fit_report;
+    let dir = r.dir;
+    progress("writing the report (CSV and SVG of every test, index.html)");
+    let mut files = fit_report::write_report(result, dir)
+        .map_err(|e| format!("cannot write the report in {}: {e}", dir.display()))?;
+    let (figures, notes) = match r.scenes {
+        Some(args) => crate::sheets::report_figures(&result.material, args, progress),
+        None => (Vec::new(), Vec::new()),
+    };
+    for n in &notes {
+        eprintln!("ks-fit: fit: {n}");
+    }
+    let page = kshell::fit::html::fit_html(result, &file.display().to_string(), &figures);
+    let index = dir.join("index.html");
+    kshell::io::write_atomic(&index, page)
+        .map_err(|e| format!("cannot write {}: {e}", index.display()))?;
+    files.push(index.display().to_string());
+    progress(&format!(
+        "report: {} files in {}",
+        files.len(),
+        dir.display()
+    ));
+    Ok(())
+}
+
+/// The fit's notes, uncertainties, per-test table and timing on stdout.
+fn print_fit(result: &kshell::fit::FitResult, quiet: bool) {
+    use kshell::fit::report as fit_report;
     // the degree choice is shown as progress; print it here only when progress is off
     let shown = if quiet { &result.degree_log[..] } else { &[] };
     for line in shown.iter().chain(&result.notes) {
@@ -198,7 +157,7 @@ pub fn cmd_fit(
     for line in &result.identifiability {
         println!("identifiability: {line}");
     }
-    print!("{}", fit_report::table(&result));
+    print!("{}", fit_report::table(result));
     let stages: Vec<String> = result
         .stats
         .stage_seconds
@@ -224,10 +183,6 @@ pub fn cmd_fit(
         result.stats.equilibria,
         stages.join(", ")
     );
-    let rows: Vec<_> = shapes.iter().map(|(t, e)| (e, t.mesh, fitted(t))).collect();
-    crate::models::print_shape_rows(&rows);
-    println!("wrote {}", out.display());
-    Ok(kshell::fit::verdict::verdict(&result, result.max_error).passed())
 }
 
 /// Each `[[shape]]` simulated with the fitted shell on the shape's mesh: a prediction
@@ -251,113 +206,32 @@ fn predict_shapes(
     Ok(out)
 }
 
-pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
+/// The flags of `ks-fit check`.
+#[derive(clap::Args)]
+pub struct CheckArgs {
+    /// The dataset's fabric.toml.
+    file: PathBuf,
+    /// Read curve files outside the dataset folder (absolute paths, `..`, symbolic links).
+    #[arg(long)]
+    allow_outside: bool,
+}
+
+/// Runs `ks-fit check`.
+pub fn cmd_check(a: &CheckArgs) -> Result<(), String> {
+    let file = a.file.as_path();
     let (data, warnings) =
-        kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
-    println!("dataset: {}", file.display());
-    println!("name: {}", data.name);
-    match data.areal_density {
-        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
-        None => println!("areal density: not given"),
-    }
-    println!(
-        "thickness: {} mm (measured; the fit's initial guess)",
-        num(data.thickness * 1e3)
-    );
-    println!(
-        "tests: {} tensile, {} bend",
-        data.tensile.len(),
-        data.bend.len()
-    );
-    for sh in &data.shapes {
-        println!(
-            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model); the shell fit fits G12 to a frame or corner-pull shape where no off-axis strip does, and predicts it otherwise",
-            sh.scene.describe(),
-            sh.obj.display(),
-            sh.target.positions.len(),
-            sh.target.triangles.len(),
-            cell(sh.target.thinnest_spread() * 1e3, 3),
-            sh.descriptor.name(),
-            sh.force.map_or(String::new(), |f| format!(", force {f} N")),
-        );
-    }
+        kshell::dataset::load_dataset_with(file, a.allow_outside).map_err(|e| e.to_string())?;
+    print_dataset(file, &data);
     println!(
         "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  use",
         "kind", "angle", "width mm", "gauge/overhang", "points", "max elong mm", "max force N"
     );
     let mut info = Vec::new();
     // what `ks-fit fit` will do with each curve by default (no solves: roles, toes, repeats)
-    use kshell::fit::preprocess::{prepare, RepeatMode, ToeMode};
-    let prep = prepare(&data, false, RepeatMode::All, ToeMode::Auto, 12);
-    for (i, t) in data.tensile.iter().enumerate() {
-        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
-        let role = match t.role(false) {
-            kshell::dataset::Role::Fit => "fitted",
-            kshell::dataset::Role::Validation => "validation",
-        };
-        if t.role.is_none() && !t.is_fitted() {
-            info.push(format!(
-                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
-                t.angle_deg,
-                t.curve.display()
-            ));
-        }
-        let toe = match &prep {
-            Ok(p) => p
-                .curves
-                .iter()
-                .find(|c| c.test == i)
-                .filter(|c| c.toe != 0.0)
-                .map(|c| {
-                    format!(
-                        ", toe {:.3} mm {}",
-                        c.toe * 1e3,
-                        if c.toe_auto { "detected" } else { "given" }
-                    )
-                })
-                .unwrap_or_default(),
-            Err(_) => String::new(),
-        };
-        println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
-            "tensile",
-            t.angle_deg,
-            num(t.width * 1e3),
-            num(t.gauge_length * 1e3),
-            t.elongation.len(),
-            cell(max_elong * 1e3, 4),
-            cell(max_force, 4),
-            t.curve.display()
-        );
-    }
-    let own_bending = data.bend.iter().any(|b| b.angle_deg == 90.0)
-        && data.bend.iter().any(|b| b.angle_deg == 0.0);
-    if own_bending {
-        info.push(
-            "bending: warp and weft bends present: fit fits their flexural rigidities of their own (the default; --bending paper fits one thickness instead)".into(),
-        );
-    }
-    for b in &data.bend {
-        let role = if own_bending {
-            "fitted: bending rigidity"
-        } else if data.known.thickness.is_some() {
-            "predicted: thickness known"
-        } else {
-            "fitted"
-        };
-        println!(
-            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
-            "bend",
-            b.angle_deg,
-            num(b.width * 1e3),
-            num(b.overhang * 1e3),
-            "-",
-            "-",
-            "-",
-            b.drape_angle_deg
-        );
-    }
+    let d = kshell::fit::FitOptions::default();
+    let prep = kshell::fit::preprocess::prepare(&data, d.paper_protocol, d.repeats, d.toe, d.nodes);
+    print_tensile(&data, &prep, &mut info);
+    print_bends(&data, &mut info);
     let k = &data.known;
     for (name, v) in [
         ("a11_pa", k.a11),
@@ -403,111 +277,114 @@ pub fn cmd_check(file: &Path, allow_outside: bool) -> Result<(), String> {
     Ok(())
 }
 
-/// The model `synth --model` runs, read from the material file.
-fn lab_model(material: &Path, model: &str) -> Result<kshell::synth::LabModel, String> {
-    use kshell::synth::LabModel;
-    use kshell::tri::file::{load_tri, TriSource};
-    if model == "kl" {
-        return Ok(LabModel::Shell(
-            load_material(material).map_err(|e| e.to_string())?,
-        ));
+/// The dataset's header lines: name, density, thickness, counts, shapes.
+fn print_dataset(file: &Path, data: &FabricDataset) {
+    println!("dataset: {}", file.display());
+    println!("name: {}", data.name);
+    match data.areal_density {
+        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
+        None => println!("areal density: not given"),
     }
-    let kind: kshell::tri::TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
-    let source = load_tri(material, kind).map_err(|e| e.to_string())?;
-    let (name, thickness) = match &source {
-        TriSource::Shell(m) => (m.name.clone(), m.thickness),
-        TriSource::Table(_) => {
-            // a [model] table has no thickness; the dataset records the file's thickness_mm
-            let text = std::fs::read_to_string(material)
-                .map_err(|e| format!("{}: {e}", material.display()))?;
-            let doc: toml::Table = text
-                .parse()
-                .map_err(|e| format!("{}: {e}", material.display()))?;
-            let number = |k: &str| {
-                doc.get(k)
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-            };
-            let thickness = number("thickness_mm").filter(|t| t.is_finite() && *t > 0.0).ok_or_else(|| {
-                format!(
-                    "{}: synth --model {model} needs thickness_mm (a positive number) beside the [model] table: the dataset records the fabric's thickness",
-                    material.display()
-                )
-            })?;
-            let name = doc
-                .get("name")
-                .and_then(|v| v.as_str())
-                .unwrap_or(model)
-                .to_string();
-            (name, thickness * 1e-3)
-        }
-    };
-    Ok(LabModel::Tri {
-        kind,
-        source,
-        name,
-        thickness,
-    })
-}
-
-pub fn cmd_synth(
-    material: &Path,
-    out: &Path,
-    model: &str,
-    opts: &kshell::synth::SynthOptions,
-    force: bool,
-) -> Result<(), String> {
-    if model != "kl" && (opts.grading.across != 0.0 || opts.grading.along != 0.0) {
-        return Err(format!(
-            "--grading applies to the kl model's strip cage, not to --model {model}"
-        ));
-    }
-    if model != "kl" && opts.yarn_rule != kshell::assembly::YarnRule::Auto {
-        return Err(format!(
-            "--yarn-rule applies to the kl model's limit surface, not to --model {model}"
-        ));
-    }
-    let lab = lab_model(material, model)?;
-    let mut guard = Guard::new(force);
-    guard.input(material);
-    guard.folder("--out", out, "fabric.toml")?;
-    let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
-    let data =
-        kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
-    let comment = format!(
-        "SYNTHETIC dataset written by ks-fit synth from the material {} (model {})\n\
-         options: --max-strain {} --points {} --repeats {} --noise {} --misalign {} --seed {} --mesh {}x{} --grading {},{} --yarn-rule {}{}\n\
-         tensile strips 50 x 75 mm; cantilevers 25 mm wide at the overhang giving 41.5 degrees{}",
-        material.display(),
-        lab.model_name(),
-        opts.max_strain,
-        opts.points,
-        opts.repeats,
-        opts.noise,
-        opts.misalign_deg,
-        opts.seed,
-        opts.mesh.0,
-        opts.mesh.1,
-        opts.grading.across,
-        opts.grading.along,
-        opts.yarn_rule.name(),
-        if opts.extra_angles.is_empty() {
-            String::new()
-        } else {
-            let a: Vec<String> = opts.extra_angles.iter().map(|a| a.to_string()).collect();
-            format!(" --angles {}", a.join(","))
-        },
-        data.notes
-            .iter()
-            .map(|n| format!("\n{n}"))
-            .collect::<String>()
-    );
-    kshell::dataset::write_dataset_with_comment(out, &data, &comment)
-        .map_err(|e| format!("{}: cannot write the dataset: {e}", out.display()))?;
     println!(
-        "wrote {} ({} tensile curves, {} bend tests)",
-        out.join("fabric.toml").display(),
+        "thickness: {} mm (measured; the fit's initial guess)",
+        num(data.thickness * 1e3)
+    );
+    println!(
+        "tests: {} tensile, {} bend",
         data.tensile.len(),
         data.bend.len()
     );
-    Ok(())
+    for sh in &data.shapes {
+        println!(
+            "shape: {} from {} ({} vertices, {} triangles, thinnest spread {} mm), descriptor {}{}; fitted by the triangle models (--model); the shell fit fits G12 to a frame or corner-pull shape where no off-axis strip does, and predicts it otherwise",
+            sh.scene.describe(),
+            sh.obj.display(),
+            sh.target.positions.len(),
+            sh.target.triangles.len(),
+            cell(sh.target.thinnest_spread() * 1e3, 3),
+            sh.descriptor.name(),
+            sh.force.map_or(String::new(), |f| format!(", force {f} N")),
+        );
+    }
+}
+
+/// The tensile tests' rows, and the notes on them in `info`.
+fn print_tensile(
+    data: &FabricDataset,
+    prep: &Result<kshell::fit::preprocess::Prepared, kshell::fit::FitError>,
+    info: &mut Vec<String>,
+) {
+    for (i, t) in data.tensile.iter().enumerate() {
+        let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max_elong = t.elongation.last().copied().unwrap_or(0.0);
+        let role = match t.role(false) {
+            kshell::dataset::Role::Fit => "fitted",
+            kshell::dataset::Role::Validation => "validation",
+        };
+        if t.role.is_none() && !t.is_fitted() {
+            info.push(format!(
+                "info: tensile {}° ({}) is not at 0, 45 or 90°: fitted by default, a validation test (predicted, not fitted) with --protocol paper or role = \"validation\"",
+                t.angle_deg,
+                t.curve.display()
+            ));
+        }
+        let toe = match prep {
+            Ok(p) => p
+                .curves
+                .iter()
+                .find(|c| c.test == i)
+                .filter(|c| c.toe != 0.0)
+                .map(|c| {
+                    format!(
+                        ", toe {:.3} mm {}",
+                        c.toe * 1e3,
+                        if c.toe_auto { "detected" } else { "given" }
+                    )
+                })
+                .unwrap_or_default(),
+            Err(_) => String::new(),
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
+            "tensile",
+            t.angle_deg,
+            num(t.width * 1e3),
+            num(t.gauge_length * 1e3),
+            t.elongation.len(),
+            cell(max_elong * 1e3, 4),
+            cell(max_force, 4),
+            t.curve.display()
+        );
+    }
+}
+
+/// The bend tests' rows, and the note on the bending model in `info`.
+fn print_bends(data: &FabricDataset, info: &mut Vec<String>) {
+    let own_bending = data.bend.iter().any(|b| b.angle_deg == 90.0)
+        && data.bend.iter().any(|b| b.angle_deg == 0.0);
+    if own_bending {
+        info.push(
+            "bending: warp and weft bends present: fit fits their flexural rigidities of their own (the default; --bending paper fits one thickness instead)".into(),
+        );
+    }
+    for b in &data.bend {
+        let role = if own_bending {
+            "fitted: bending rigidity"
+        } else if data.known.thickness.is_some() {
+            "predicted: thickness known"
+        } else {
+            "fitted"
+        };
+        println!(
+            "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
+            "bend",
+            b.angle_deg,
+            num(b.width * 1e3),
+            num(b.overhang * 1e3),
+            "-",
+            "-",
+            "-",
+            b.drape_angle_deg
+        );
+    }
 }

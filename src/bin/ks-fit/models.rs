@@ -4,6 +4,7 @@
 
 use crate::auto::auto_bend;
 use crate::scene::{describe, unstable_error, SceneArgs};
+use kshell::fit::tri::TriFit;
 use kshell::scene::{TriCantilever, TriTensile};
 use kshell::tri::file::{load_tri, TriSource};
 use kshell::tri::TriKind;
@@ -122,15 +123,13 @@ pub fn bend(
 pub fn fit(
     file: &Path,
     output: Option<&Path>,
-    model: &str,
+    kind: TriKind,
     quiet: bool,
     force: bool,
     allow_outside: bool,
     max_error: f64,
 ) -> Result<bool, String> {
     use kshell::fit::tri::{fit_tri, TriFitOptions};
-    use std::fmt::Write;
-    let kind: TriKind = model.parse().map_err(|e| format!("--model: {e}"))?;
     let (data, warnings) =
         kshell::dataset::load_dataset_with(file, allow_outside).map_err(|e| e.to_string())?;
     let out = output.map(|p| p.to_path_buf()).unwrap_or_else(|| {
@@ -153,7 +152,18 @@ pub fn fit(
         }
     };
     let r = fit_tri(&data, &TriFitOptions::new(kind), &mut progress)?;
-    let mut text = kshell::tri::file::tri_toml(&data.name, &r.material);
+    let text = tri_fit_toml(&data.name, file, kind, &r);
+    kshell::io::write_atomic(&out, text)
+        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    print_tri_fit(kind, &r);
+    println!("wrote {}", out.display());
+    Ok(tri_verdict(&r, max_error))
+}
+
+/// The fitted `[model]` table and the `[fit]` table of how well it reproduces every test.
+fn tri_fit_toml(name: &str, file: &Path, kind: TriKind, r: &TriFit) -> String {
+    use std::fmt::Write;
+    let mut text = kshell::tri::file::tri_toml(name, &r.material);
     let _ = writeln!(
         text,
         "\n[fit]    # how this material was obtained; read past by ks-fit"
@@ -208,8 +218,11 @@ pub fn fit(
             t.mesh.0, t.mesh.1, t.fitted
         );
     }
-    kshell::io::write_atomic(&out, text)
-        .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    text
+}
+
+/// The fit's notes and its per-test table on stdout.
+fn print_tri_fit(kind: TriKind, r: &TriFit) {
     for n in &r.notes {
         println!("note: {n}");
     }
@@ -244,7 +257,10 @@ pub fn fit(
         r.seconds,
         r.evaluations
     );
-    println!("wrote {}", out.display());
+}
+
+/// Whether every fitted test solves and is within `max_error`; prints FIT FAILED otherwise.
+fn tri_verdict(r: &TriFit, max_error: f64) -> bool {
     // a fitted test the final parameters do not solve is a failed fit, never a quiet pass
     let unsolved: Vec<String> = r
         .tests
@@ -265,7 +281,7 @@ pub fn fit(
             "FIT FAILED: {} do not solve with the fitted parameters (written as nan; the law is likely degenerate there, see the [model] table)",
             unsolved.join(", ")
         );
-        return Ok(false);
+        return false;
     }
     let over = kshell::fit::tri::verdict::over(&r.tests, max_error);
     if !over.is_empty() {
@@ -274,9 +290,9 @@ pub fn fit(
             100.0 * max_error,
             over.join(", ")
         );
-        return Ok(false);
+        return false;
     }
-    Ok(true)
+    true
 }
 
 /// The keys of one shape's `[[fit.test]]` entry after `kind` and `obj` (`nan` where the scene

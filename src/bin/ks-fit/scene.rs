@@ -2,9 +2,11 @@
 //! ASTM D1388 cantilever) and `converge` (a mesh-refinement study of either), with the checks
 //! of their flags (lengths, angles, steps) made before anything is built.
 
+use crate::flags::{boundary_help, grading_help, model_help, strategy_help, yarn_rule_help};
 use crate::guard;
 use crate::parse_mesh;
 use clap::Subcommand;
+use kshell::assembly::YarnRule;
 use kshell::material::load_material;
 use kshell::scene::{CantileverBend, TensileStrip};
 use kshell::solve::{NewtonOptions, Precision};
@@ -18,28 +20,13 @@ pub struct SceneArgs {
     /// Faces across × along, e.g. 8x12 (default: the automatic choice, see --tol).
     #[arg(long, value_parser = parse_mesh)]
     pub mesh: Option<(usize, usize)>,
-    /// Boundary treatment of the limit surface: phantom or ghost (default: phantom for strips,
-    /// ghost for cantilevers, the better of the two for each in the README's comparison).
-    #[arg(long)]
+    #[arg(long, help = boundary_help(" (default: phantom for strips, ghost for cantilevers, the better of the two for each in paper_repro/convergence/heavy_cantilever.txt)"))]
     pub boundary: Option<BoundaryRule>,
-    /// Strip cage grading towards the free edges and the jaws, "across,along", each in [0, 1)
-    /// (tensile strips; default 0.8,0.8 on the automatic mesh, 0 (uniform) with --mesh;
-    /// 0.8,0.8 makes a bias strip's force 4–6 times more accurate on the same mesh).
-    #[arg(long, value_parser = crate::parse_grading)]
+    #[arg(long, value_parser = crate::parse_grading, help = grading_help(&format!("; tensile strips: default {} on the automatic mesh, 0 (uniform) with --mesh", kshell::scene::STRIP_GRADING)))]
     pub grading: Option<kshell::mesh::Grading>,
-    /// How the yarn (warp, weft, a12) terms are integrated: full (4 × 4 Gauss points per
-    /// face), centre (one point per face: a membrane that does not lock when the yarns are
-    /// nearly inextensible and cross the cage; also `center`), or auto (centre above a
-    /// yarn-to-shear ratio max(a11, a22)/G12 of 20, below which the two are the same; a
-    /// cantilever's auto is always full).
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = YarnRule::default().name(), help = yarn_rule_help("; a cantilever's auto is always full"))]
     pub yarn_rule: kshell::assembly::YarnRule,
-    /// Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape
-    /// angle (default 0.05; three meshes of elements about 6.25 mm, then twice and four times
-    /// as fine), for `tensile` the relative force error over the curve (default 0.003, i.e.
-    /// 0.3 %; graded cages from 4 faces across, doubled until one passes). Each mesh's error
-    /// is estimated by Richardson extrapolation and the coarsest within it kept.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, help = tol_help())]
     pub tol: Option<f64>,
     /// Report each solve on stderr.
     #[arg(short, long)]
@@ -50,26 +37,28 @@ pub struct SceneArgs {
     /// Plain Newton: no backward-Euler fallback and no refinement (for comparison).
     #[arg(long)]
     plain_newton: bool,
-    /// How a cantilever's weight is brought on: `full-step` (the whole load by full-step
-    /// Newton first, the ramp if that fails), `ramp` (load steps from 1/8, each solve
-    /// line-searched), `trust-region` (every solve by trust-region Newton, the whole load
-    /// first) or `adaptive` (load steps sized from the predictor's error).
-    #[arg(long, default_value = "full-step")]
+    #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = strategy_help(" (for a cantilever: how its weight is brought on)"))]
     strategy: kshell::solve::Strategy,
-    /// Cloth model: kl (the subdivision shell, Clyde et al. 2017), springs, soft-constraints,
-    /// stvk-ds (Miguel et al. 2012) or xpbd (Larionov et al. 2022's energy). A triangle model
-    /// reads the material file's [model] table, or converts the shell law's zero-strain moduli.
-    #[arg(long, default_value = "kl")]
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL, help = model_help("; a triangle model reads the material file's [model] table, or converts the shell law's zero-strain moduli"))]
     pub model: String,
+}
+
+/// `--tol` of `tensile` and `bend`, with their defaults.
+fn tol_help() -> String {
+    use crate::auto::{BEND_TOL_DEG, TENSILE_TOL};
+    format!(
+        "Without --mesh, the error the automatic mesh must meet: for `bend` degrees of drape angle (default {BEND_TOL_DEG}; three meshes of elements about 6.25 mm, then twice and four times as fine), for `tensile` the relative force error over the curve (default {TENSILE_TOL}, i.e. {} %; graded cages from 4 faces across, doubled until one passes). Each mesh's error is estimated by Richardson extrapolation and the coarsest within it kept",
+        (TENSILE_TOL * 1e6).round() / 1e4
+    )
 }
 
 impl SceneArgs {
     /// The triangle model asked for (`None`: the shell), refusing the shell-only flags with it.
     pub fn tri_model(&self) -> Result<Option<kshell::tri::TriKind>, String> {
-        if self.model == "kl" {
-            return Ok(None);
-        }
-        let kind = self.model.parse().map_err(|e| format!("--model: {e}"))?;
+        let kind = match crate::flags::Model::parse(&self.model)? {
+            crate::flags::Model::Kl => return Ok(None),
+            crate::flags::Model::Tri(kind) => kind,
+        };
         if self.boundary.is_some()
             || self.grading.is_some()
             || self.yarn_rule != kshell::assembly::YarnRule::Auto
@@ -152,14 +141,11 @@ pub struct StudyArgs {
     /// Write an SVG chart of error against DOFs and against time.
     #[arg(long)]
     plot: Option<PathBuf>,
-    /// Boundary treatment of the limit surface: phantom or ghost (default: the scene's own).
-    #[arg(long)]
+    #[arg(long, help = boundary_help(" (default: the scene's own)"))]
     boundary: Option<BoundaryRule>,
-    /// Strip cage grading, "across,along" (tensile studies; default 0: uniform).
-    #[arg(long, value_parser = crate::parse_grading)]
+    #[arg(long, value_parser = crate::parse_grading, help = grading_help("; tensile studies; default uniform"))]
     grading: Option<kshell::mesh::Grading>,
-    /// How the yarn terms are integrated: auto, full or centre (see `tensile --yarn-rule`).
-    #[arg(long, default_value = "auto")]
+    #[arg(long, default_value = YarnRule::default().name(), help = yarn_rule_help(""))]
     yarn_rule: kshell::assembly::YarnRule,
 }
 
@@ -401,118 +387,120 @@ pub fn cmd_bend(
     unstable_error("the cantilever's equilibrium", &saddle, "at overhang {} mm")
 }
 
-pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
-    use kshell::converge::{default_ladder, parse_ladder, study};
-    let (study_args, aspect, title) = match &scene {
-        ConvergeScene::Tensile {
-            study,
-            width,
-            length,
-            angle,
-            elongation,
-            ..
-        } => (
-            study,
-            length / width,
-            format!("tensile {angle}°, {width} x {length} mm, force at {elongation} mm"),
-        ),
-        ConvergeScene::Bend {
-            study,
-            width,
-            overhang,
-            angle,
-            ..
-        } => (
-            study,
-            overhang / width,
-            format!("cantilever {angle}°, {width} mm wide, overhang {overhang} mm"),
-        ),
-    };
-    match &scene {
-        ConvergeScene::Tensile {
-            angle,
-            width,
-            length,
-            elongation,
-            ..
-        } => {
-            let (_, l, e) = (
-                mm("width", *width)?,
-                mm("length", *length)?,
-                mm("elongation", *elongation)?,
-            );
-            angle_deg(*angle)?;
-            if e > 2.0 * l {
-                return Err(
-                    "--elongation is more than twice the gauge length (200 % strain)".into(),
-                );
-            }
-        }
-        ConvergeScene::Bend {
-            angle,
-            overhang,
-            width,
-            ..
-        } => {
-            mm("width", *width)?;
-            mm("overhang", *overhang)?;
-            angle_deg(*angle)?;
+impl ConvergeScene {
+    fn study_args(&self) -> &StudyArgs {
+        match self {
+            ConvergeScene::Tensile { study, .. } | ConvergeScene::Bend { study, .. } => study,
         }
     }
-    let ladder = match &study_args.mesh_ladder {
+
+    fn material(&self) -> &PathBuf {
+        match self {
+            ConvergeScene::Tensile { material, .. } | ConvergeScene::Bend { material, .. } => {
+                material
+            }
+        }
+    }
+
+    /// The scene's aspect ratio (for the default ladder) and the chart's title, its
+    /// dimensions checked.
+    fn checked(&self) -> Result<(f64, String), String> {
+        match self {
+            ConvergeScene::Tensile {
+                angle,
+                width,
+                length,
+                elongation,
+                ..
+            } => {
+                let (_, l, e) = (
+                    mm("width", *width)?,
+                    mm("length", *length)?,
+                    mm("elongation", *elongation)?,
+                );
+                angle_deg(*angle)?;
+                if e > 2.0 * l {
+                    return Err(
+                        "--elongation is more than twice the gauge length (200 % strain)".into(),
+                    );
+                }
+                let title =
+                    format!("tensile {angle}°, {width} x {length} mm, force at {elongation} mm");
+                Ok((length / width, title))
+            }
+            ConvergeScene::Bend {
+                angle,
+                overhang,
+                width,
+                ..
+            } => {
+                mm("width", *width)?;
+                mm("overhang", *overhang)?;
+                angle_deg(*angle)?;
+                let title = format!("cantilever {angle}°, {width} mm wide, overhang {overhang} mm");
+                Ok((overhang / width, title))
+            }
+        }
+    }
+}
+
+/// The study's ladder: `--mesh-ladder`, or `--levels` meshes of the scene's aspect ratio.
+fn study_ladder(a: &StudyArgs, aspect: f64) -> Result<Vec<(usize, usize)>, String> {
+    use kshell::converge::{default_ladder, parse_ladder, MAX_LEVELS};
+    let ladder = match &a.mesh_ladder {
         Some(l) => parse_ladder(l).map_err(|e| format!("--mesh-ladder: {e}"))?,
         None => {
-            if !(1..=kshell::converge::MAX_LEVELS).contains(&study_args.levels) {
+            if !(1..=MAX_LEVELS).contains(&a.levels) {
                 return Err(format!(
-                    "--levels must be in [1, {}], got {}",
-                    kshell::converge::MAX_LEVELS,
-                    study_args.levels
+                    "--levels must be in [1, {MAX_LEVELS}], got {}",
+                    a.levels
                 ));
             }
-            default_ladder(aspect, study_args.levels)
+            default_ladder(aspect, a.levels)
         }
     };
-    let flag = if study_args.mesh_ladder.is_some() {
+    let flag = if a.mesh_ladder.is_some() {
         "--mesh-ladder"
     } else {
         "--levels"
     };
     kshell::converge::check_ladder(&ladder, true).map_err(|e| format!("{flag}: {e}"))?;
-    if let Some(t) = study_args.tol {
-        if !(t.is_finite() && t > 0.0) {
-            return Err(format!("--tol must be a positive number, got {t:?}"));
-        }
-    }
-    let mut guard = guard::Guard::new(force);
-    guard.input(match &scene {
-        ConvergeScene::Tensile { material, .. } | ConvergeScene::Bend { material, .. } => material,
-    });
-    if let Some(p) = &study_args.csv {
-        guard.file("--csv", p)?;
-    }
-    if let Some(p) = &study_args.plot {
-        guard.file("--plot", p)?;
-    }
-    let dofs = |(nx, ny): (usize, usize), rule: BoundaryRule| match rule {
+    Ok(ladder)
+}
+
+/// Degrees of freedom of a cage under a boundary rule.
+fn dofs((nx, ny): (usize, usize), rule: BoundaryRule) -> usize {
+    match rule {
         BoundaryRule::Phantom => 3 * (nx + 1) * (ny + 1),
         BoundaryRule::Ghost => 3 * (nx + 3) * (ny + 3),
-    };
+    }
+}
+
+/// The scene solved on every mesh of the ladder, its QoI and DOFs.
+fn run_study(
+    scene: &ConvergeScene,
+    ladder: &[(usize, usize)],
+) -> Result<kshell::converge::Study, String> {
+    use kshell::converge::study;
     let progress = |l: &kshell::converge::Level| {
         eprintln!(
             "ks-fit: {}x{} done: qoi {:.12e} in {:.2} s",
             l.mesh.0, l.mesh.1, l.qoi, l.seconds
         )
     };
-    let result = match &scene {
+    let mat = load_material(scene.material()).map_err(|e| e.to_string())?;
+    let a = scene.study_args();
+    let at = |mesh: (usize, usize), e: kshell::scene::SceneError| {
+        format!("mesh {}x{}: {e}", mesh.0, mesh.1)
+    };
+    match scene {
         ConvergeScene::Tensile {
-            material,
             angle,
             width,
             length,
             elongation,
-            study: a,
+            ..
         } => {
-            let mat = load_material(material).map_err(|e| e.to_string())?;
             let (w, l, e) = (
                 mm("width", *width)?,
                 mm("length", *length)?,
@@ -521,54 +509,60 @@ pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
             // steps of at most 5 % strain
             let n = ((e / l) / 0.05).ceil().max(1.0) as usize;
             let dl: Vec<f64> = (1..=n).map(|i| e * i as f64 / n as f64).collect();
-            study(
-                &ladder,
-                |mesh| {
-                    let mut strip = TensileStrip::new(w, l, *angle);
-                    strip.mesh = mesh;
-                    strip.grading = a.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
-                    strip.yarn_rule = a.yarn_rule;
-                    if let Some(b) = a.boundary {
-                        strip.boundary = b;
-                    }
-                    let curve = strip
-                        .run(&mat, &dl)
-                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
-                    Ok::<_, String>((
-                        curve.last().map(|p| p.force).unwrap_or(0.0),
-                        dofs(mesh, strip.boundary),
-                    ))
-                },
-                progress,
-            )?
+            let solve = |mesh| {
+                let mut strip = TensileStrip::new(w, l, *angle);
+                strip.mesh = mesh;
+                strip.grading = a.grading.unwrap_or(kshell::mesh::Grading::UNIFORM);
+                strip.yarn_rule = a.yarn_rule;
+                if let Some(b) = a.boundary {
+                    strip.boundary = b;
+                }
+                let curve = strip.run(&mat, &dl).map_err(|e| at(mesh, e))?;
+                let force = curve.last().map(|p| p.force).unwrap_or(0.0);
+                Ok::<_, String>((force, dofs(mesh, strip.boundary)))
+            };
+            study(ladder, solve, progress)
         }
         ConvergeScene::Bend {
-            material,
             angle,
             overhang,
             width,
-            study: a,
+            ..
         } => {
-            let mat = load_material(material).map_err(|e| e.to_string())?;
             let (w, l) = (mm("width", *width)?, mm("overhang", *overhang)?);
-            study(
-                &ladder,
-                |mesh| {
-                    let mut bend = CantileverBend::new(w, l, *angle);
-                    bend.mesh = (mesh.0, mesh.1.max(2));
-                    if let Some(b) = a.boundary {
-                        bend.boundary = b;
-                    }
-                    bend.yarn_rule = a.yarn_rule;
-                    let r = bend
-                        .run(&mat)
-                        .map_err(|e| format!("mesh {}x{}: {e}", mesh.0, mesh.1))?;
-                    Ok::<_, String>((r.drape_angle_deg, dofs(bend.mesh, bend.boundary)))
-                },
-                progress,
-            )?
+            let solve = |mesh: (usize, usize)| {
+                let mut bend = CantileverBend::new(w, l, *angle);
+                bend.mesh = (mesh.0, mesh.1.max(2));
+                if let Some(b) = a.boundary {
+                    bend.boundary = b;
+                }
+                bend.yarn_rule = a.yarn_rule;
+                let r = bend.run(&mat).map_err(|e| at(mesh, e))?;
+                Ok::<_, String>((r.drape_angle_deg, dofs(bend.mesh, bend.boundary)))
+            };
+            study(ladder, solve, progress)
         }
-    };
+    }
+}
+
+pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
+    let study_args = scene.study_args();
+    let (aspect, title) = scene.checked()?;
+    let ladder = study_ladder(study_args, aspect)?;
+    if let Some(t) = study_args.tol {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(format!("--tol must be a positive number, got {t:?}"));
+        }
+    }
+    let mut guard = guard::Guard::new(force);
+    guard.input(scene.material());
+    if let Some(p) = &study_args.csv {
+        guard.file("--csv", p)?;
+    }
+    if let Some(p) = &study_args.plot {
+        guard.file("--plot", p)?;
+    }
+    let result = run_study(&scene, &ladder)?;
     print!("{}", result.table());
     if let Some(t) = study_args.tol {
         match result.pick(t) {

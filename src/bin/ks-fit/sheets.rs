@@ -3,6 +3,7 @@
 //! discretisation error meets `--tol`, with the deformed surface written as OBJ and PLY, the
 //! quantities of interest as CSV, and `scene.toml` saying what was run and how well.
 
+use crate::flags::Model;
 use crate::guard::Guard;
 use crate::scene_shape::{SceneMaterial, Shape};
 use clap::Subcommand;
@@ -13,6 +14,14 @@ use kshell::solve::NewtonOptions;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// `picture-frame --shear-deg`'s default (also `recommend`'s): the final shear angle, degrees.
+pub const FRAME_SHEAR_DEG: f64 = 40.0;
+/// `corner-pull --stretch`'s default (also `recommend`'s): the diagonal's final stretch, %.
+pub const CORNER_STRETCH_PERCENT: f64 = 10.0;
+
+/// `--tol`'s default: the relative discretisation error the automatic mesh must meet.
+const SCENE_TOL: f64 = 0.01;
 
 /// Newton and backward-Euler iterations allowed per equilibrium solve of a showcase scene.
 const SCENE_ITERATIONS: usize = 500;
@@ -29,7 +38,7 @@ pub struct ShowArgs {
     out: Option<PathBuf>,
     /// Relative discretisation error the automatic mesh must meet (Richardson estimate over
     /// three meshes, each twice as fine as the last; the coarsest that meets it is kept).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = SCENE_TOL)]
     tol: f64,
     /// Force one mesh, faces each way ("16" or "16x16"; the sheets are square): no ladder.
     #[arg(long, value_parser = parse_square)]
@@ -41,17 +50,9 @@ pub struct ShowArgs {
     /// buckles: 0 the lowest mode, any other value a pseudo-random mix of low modes.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// How each equilibrium is solved: `full-step`, `ramp` and `adaptive` (Newton with the
-    /// energy line search and the backward-Euler fallback; they differ in how a load is
-    /// brought on, here only the drape's weight) or `trust-region` (trust-region Newton on
-    /// the factorised Hessian, backward Euler the last resort). See the stability atlas.
-    #[arg(long, default_value = "full-step")]
+    #[arg(long, default_value = kshell::solve::Strategy::default().name(), help = crate::flags::strategy_help(" of every equilibrium (the load brought on is only the drape's weight; see the stability atlas)"))]
     strategy: kshell::solve::Strategy,
-    /// Cloth model: kl (the subdivision shell, Clyde et al. 2017), or a triangle model
-    /// (springs, soft-constraints, stvk-ds, xpbd) on the same sheet as a grid of n × n cells
-    /// split by one diagonal, with the file's [model] table or the shell law converted at
-    /// each mesh's cell size.
-    #[arg(long, default_value = "kl")]
+    #[arg(long, default_value = crate::flags::DEFAULT_MODEL, help = crate::flags::model_help("; a triangle model on the same sheet as a grid of n × n cells split by one diagonal, with the file's [model] table or the shell law converted at each mesh's cell size"))]
     model: String,
     /// Also report the solver's counts of the chosen mesh on stderr (each mesh of the ladder
     /// is reported anyway).
@@ -79,7 +80,7 @@ pub enum ShowScene {
         #[command(flatten)]
         args: ShowArgs,
         /// Final shear angle, degrees.
-        #[arg(long, default_value_t = 40.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = FRAME_SHEAR_DEG, allow_negative_numbers = true)]
         shear_deg: f64,
     },
     /// A 10 cm × 10 cm square pulled along one diagonal by 1 cm clips on two corners to
@@ -89,7 +90,7 @@ pub enum ShowScene {
         #[command(flatten)]
         args: ShowArgs,
         /// Final stretch of the diagonal, percent.
-        #[arg(long, default_value_t = 10.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = CORNER_STRETCH_PERCENT, allow_negative_numbers = true)]
         stretch: f64,
     },
 }
@@ -309,18 +310,10 @@ struct Choice {
     ladder: Vec<Level>,
 }
 
-pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
-    scene.check()?;
-    let a = scene.args();
-    let material = match a.model.as_str() {
-        "kl" => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
-        m => {
-            let kind = m.parse().map_err(|e| format!("--model: {e}"))?;
-            SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
-        }
-    };
+/// Warns where the picture frame shears a shell past its law's measured range.
+fn warn_past_shear_cutoff(scene: &ShowScene, material: &SceneMaterial) {
     if let (ShowScene::PictureFrame { shear_deg, .. }, SceneMaterial::Shell(material)) =
-        (&scene, &material)
+        (scene, material)
     {
         // a sheet that follows the frame has Ẽ₁₂ = sin γ / 2 (wrinkles only relieve it)
         let e12 = shear_deg.to_radians().sin().abs() / 2.0;
@@ -331,6 +324,18 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
             );
         }
     }
+}
+
+pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
+    scene.check()?;
+    let a = scene.args();
+    let material = match Model::parse(&a.model)? {
+        Model::Kl => SceneMaterial::Shell(load_material(&a.material).map_err(|e| e.to_string())?),
+        Model::Tri(kind) => {
+            SceneMaterial::Tri(kind, crate::models::source(kind, &a.material, "scene")?)
+        }
+    };
+    warn_past_shear_cutoff(&scene, &material);
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(scene.name()));
     let mut guard = Guard::new(force);
     guard.input(&a.material);

@@ -57,12 +57,13 @@ impl Row {
             .collect()
     }
 
-    /// The cloth model the row fits (`kl` unless its `model` cell says otherwise).
+    /// The cloth model the row fits (`fit --model`'s default unless its `model` cell says
+    /// otherwise).
     pub fn model(&self) -> &str {
         self.options
             .iter()
             .find(|(k, _)| k == "model")
-            .map_or("kl", |(_, v)| v.as_str())
+            .map_or(crate::flags::DEFAULT_MODEL, |(_, v)| v.as_str())
     }
 }
 
@@ -218,6 +219,18 @@ mod tests {
 
     fn parse(text: &str) -> Result<Vec<Row>, String> {
         parse_manifest(text, Path::new("lib/manifest.csv"))
+    }
+
+    /// Every option column is a `ks-fit fit` flag that takes a value.
+    #[test]
+    fn fit_columns_are_fit_flags() {
+        use clap::Args;
+        let fit = crate::fit::FitArgs::augment_args(clap::Command::new("fit"));
+        for c in FIT_COLUMNS {
+            let long = c.replace('_', "-");
+            let flag = fit.get_arguments().find(|a| a.get_long() == Some(&long));
+            assert!(flag.is_some_and(|a| a.get_action().takes_values()), "{c}");
+        }
     }
 
     #[test]

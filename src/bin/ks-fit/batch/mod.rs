@@ -436,7 +436,7 @@ fn fit_child(
         .arg(&row.given)
         .arg("-o")
         .arg(absolute(&work.join("material.toml"))?);
-    if row.model() == "kl" {
+    if row.model() == crate::flags::DEFAULT_MODEL {
         cmd.arg("--report").arg(absolute(&work.join("report"))?);
     }
     cmd.args(row.fit_args())
