@@ -147,6 +147,57 @@ pub(super) fn read_shape(
 ) -> Result<ShapeTest, DatasetError> {
     let r = spanned.get_ref();
     let what = format!("shape {}: ", i + 1);
+    let scene = read_scene(t, &what, spanned)?;
+    let scale = match choice(t, &what, "units", &r.units, &["m", "mm"])? {
+        Some("mm") => 1e-3,
+        _ => 1.0,
+    };
+    let descriptor = match choice(t, &what, "descriptor", &r.descriptor, &["positions", "fft"])? {
+        Some("fft") => Descriptor::Fft,
+        _ => Descriptor::Positions,
+    };
+    let role = match choice(t, &what, "role", &r.role, &["fit", "validation"])? {
+        Some("fit") => Some(Role::Fit),
+        Some(_) => Some(Role::Validation),
+        None => None,
+    };
+    let force = match &r.force_n {
+        Some(v) => Some(t.positive(&what, "force_n", v, 1.0)?),
+        None => None,
+    };
+    let mesh = match &r.mesh {
+        None => None,
+        Some(v) => {
+            let m = *v.get_ref();
+            if !(2..=128).contains(&m) {
+                return Err(t.err(
+                    v.span(),
+                    format!("{what}mesh must be 2 to 128 faces each way, got {m}"),
+                ));
+            }
+            Some(m as usize)
+        }
+    };
+    let obj = PathBuf::from(r.obj.get_ref());
+    let target = read_target(t, &what, &dir.join(&obj), &r.obj, scale, descriptor)?;
+    Ok(ShapeTest {
+        scene,
+        obj,
+        target,
+        descriptor,
+        force,
+        role,
+        mesh,
+    })
+}
+
+/// A shape entry's scene with its size and its loading (shear, stretch or span), checked.
+fn read_scene(
+    t: &Toml,
+    what: &str,
+    spanned: &Spanned<RawShape>,
+) -> Result<ShapeScene, DatasetError> {
+    let r = spanned.get_ref();
     let need = |v: &Option<Spanned<f64>>, key: &str, scene: &str| match v {
         Some(v) => Ok(v.clone()),
         None => Err(t.err(spanned.span(), format!("{what}a {scene} shape needs {key}"))),
@@ -164,7 +215,7 @@ pub(super) fn read_shape(
         100.0
     };
     let side = match &r.side_mm {
-        Some(v) => t.positive(&what, "side_mm", v, 1e-3)?,
+        Some(v) => t.positive(what, "side_mm", v, 1e-3)?,
         None => side_default * 1e-3,
     };
     let scene = match r.scene.get_ref().as_str() {
@@ -207,7 +258,7 @@ pub(super) fn read_shape(
                 ));
             }
             let span = match &r.span_mm {
-                Some(v) => t.positive(&what, "span_mm", v, 1e-3)?,
+                Some(v) => t.positive(what, "span_mm", v, 1e-3)?,
                 None => 0.6 * side,
             };
             if span > side {
@@ -225,42 +276,23 @@ pub(super) fn read_shape(
             ))
         }
     };
-    let scale = match choice(t, &what, "units", &r.units, &["m", "mm"])? {
-        Some("mm") => 1e-3,
-        _ => 1.0,
-    };
-    let descriptor = match choice(t, &what, "descriptor", &r.descriptor, &["positions", "fft"])? {
-        Some("fft") => Descriptor::Fft,
-        _ => Descriptor::Positions,
-    };
-    let role = match choice(t, &what, "role", &r.role, &["fit", "validation"])? {
-        Some("fit") => Some(Role::Fit),
-        Some(_) => Some(Role::Validation),
-        None => None,
-    };
-    let force = match &r.force_n {
-        Some(v) => Some(t.positive(&what, "force_n", v, 1.0)?),
-        None => None,
-    };
-    let mesh = match &r.mesh {
-        None => None,
-        Some(v) => {
-            let m = *v.get_ref();
-            if !(2..=128).contains(&m) {
-                return Err(t.err(
-                    v.span(),
-                    format!("{what}mesh must be 2 to 128 faces each way, got {m}"),
-                ));
-            }
-            Some(m as usize)
-        }
-    };
-    let obj = PathBuf::from(r.obj.get_ref());
-    let obj_path = dir.join(&obj);
+    Ok(scene)
+}
+
+/// The target mesh read from the OBJ file `obj_path` (`obj` as written, for its line), in metres
+/// (`scale` per unit of the file); the fft descriptor checks it has material coordinates.
+fn read_target(
+    t: &Toml,
+    what: &str,
+    obj_path: &Path,
+    obj: &Spanned<String>,
+    scale: f64,
+    descriptor: Descriptor,
+) -> Result<ShapeMesh, DatasetError> {
     let name = obj_path.display().to_string();
-    let text = crate::io::read_text(&obj_path, MAX_OBJ_BYTES).map_err(|e| {
+    let text = crate::io::read_text(obj_path, MAX_OBJ_BYTES).map_err(|e| {
         t.err(
-            r.obj.span(),
+            obj.span(),
             format!("{what}cannot read shape file {name}: {e}"),
         )
     })?;
@@ -273,20 +305,12 @@ pub(super) fn read_shape(
         if let Err(why) = crate::shape::fft::resample(&target, 4) {
             return Err(DatasetError {
                 file: t.file.to_string(),
-                line: Some(line_of(t.text, r.obj.span().start)),
+                line: Some(line_of(t.text, obj.span().start)),
                 message: format!(
                     "{what}the fft descriptor needs material coordinates: {name}: {why}"
                 ),
             });
         }
     }
-    Ok(ShapeTest {
-        scene,
-        obj,
-        target,
-        descriptor,
-        force,
-        role,
-        mesh,
-    })
+    Ok(target)
 }

@@ -14,8 +14,8 @@ use super::{to_evaluation, FitError, Fitter};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::BendTest;
 use crate::material::bending::{bias_ratio, twist_following};
-use crate::material::BendingRigidity;
-use crate::scene::SceneError;
+use crate::material::{BendingRigidity, Orthotropic};
+use crate::scene::{BendRig, SceneError};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -91,87 +91,38 @@ impl Fitter<'_> {
         });
         let mut rigs = self.bend_rigs(bends, level)?;
         // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
-        let n = if off_axis { 3 } else { 2 };
-        let rigidity = |q: &[f64]| {
-            let (warp, weft) = (b0.warp * q[0].exp(), b0.weft * q[1].exp());
-            let twist = if off_axis {
-                b0.twist * q[2].exp()
-            } else {
-                twist_following(warp, weft, ratio)
-            };
-            BendingRigidity { warp, weft, twist }
+        let rigidity = Rigidity {
+            b0,
+            off_axis,
+            ratio,
         };
-        let (law, tau) = (self.law.clone(), self.thickness);
-        let nlaw = law.params().len();
+        let n = rigidity.n();
+        let law = self.law.clone();
         let mut p = vec![0.0; n];
         let opts = self.stage_options(level, 1e-14, bends.len());
-        let (mut evals, mut newton) = (0, 0);
-        let mut seen = super::uncertainty::Seen::new();
-        let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
-            let b = rigidity(q);
-            let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = rigs
-                .par_iter_mut()
-                .map(|rig| {
-                    rig.set_material(&law, tau)?;
-                    rig.set_bending(Some(b));
-                    rig.run(jac)
-                })
-                .collect();
-            let (mut r, mut j) = (Vec::new(), Vec::new());
-            for (pt, t) in runs.into_iter().zip(bends) {
-                let pt = pt?;
-                evals += 1;
-                newton += pt.report.iterations;
-                r.push((pt.drape_angle_deg - t.drape_angle_deg) / t.drape_angle_deg);
-                if jac {
-                    let d = &pt.dangle[nlaw + 1..nlaw + 4];
-                    let mut row = vec![b.warp * d[0], b.weft * d[1]];
-                    if off_axis {
-                        row.push(b.twist * d[2]);
-                    } else {
-                        // the twist follows warp and weft
-                        let (tw, tf) = b.twist_rates(ratio);
-                        row[0] += b.warp * tw * d[2];
-                        row[1] += b.weft * tf * d[2];
-                    }
-                    j.push(row.iter().map(|v| v / t.drape_angle_deg).collect());
-                }
-            }
-            let e = to_evaluation(r, j, n, jac);
-            seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
-            Ok(e)
+        let mut problem = BendProblem {
+            rigs: &mut rigs,
+            bends,
+            nlaw: law.params().len(),
+            law,
+            tau: self.thickness,
+            rigidity,
+            evals: 0,
+            newton: 0,
+            seen: super::uncertainty::Seen::new(),
         };
-        let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
-            stage: format!("bending stage on {}×{}", level.0, level.1),
-            source,
-        })?;
+        let rep = minimize(&mut p, &opts, |q: &[f64], jac: bool| problem.eval(q, jac)).map_err(
+            |source| FitError::Scene {
+                stage: format!("bending stage on {}×{}", level.0, level.1),
+                source,
+            },
+        )?;
+        let (evals, newton, seen) = (problem.evals, problem.newton, problem.seen);
         self.stats.evaluations += evals;
         self.stats.equilibria += evals;
         self.stats.newton_iterations += newton;
-        let b = rigidity(&p);
-        let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
-        let values = [b.warp, b.weft, b.twist];
-        if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
-            self.linearised.push(super::mesh_check::Linearised::bends(
-                level,
-                j,
-                &names[..n],
-                &values[..n],
-            ));
-        }
-        self.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
-            Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
-            None => Vec::new(),
-        };
-        if !off_axis {
-            self.stage_errors.push(super::uncertainty::ParamError {
-                name: names[2].into(),
-                value: b.twist,
-                std_error: None,
-                basis: "assumed",
-                determined: false,
-            });
-        }
+        let b = rigidity.at(&p);
+        self.bending_errors(b, off_axis, &seen, &p, level);
         self.bend_angles.clear();
         for rig in &mut rigs {
             rig.set_bending(Some(b));
@@ -201,6 +152,133 @@ impl Fitter<'_> {
         self.say(&msg);
         self.time_stage("bending", t0);
         Ok(())
+    }
+
+    /// The bending stage's linearisation and standard errors at its optimum p (rigidities
+    /// `b`; the twist assumed without an off-axis bend).
+    fn bending_errors(
+        &mut self,
+        b: BendingRigidity,
+        off_axis: bool,
+        seen: &super::uncertainty::Seen,
+        p: &[f64],
+        level: (usize, usize),
+    ) {
+        let n = p.len();
+        let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
+        let values = [b.warp, b.weft, b.twist];
+        if let Some((_, j)) = super::uncertainty::at_optimum(seen, p) {
+            self.linearised.push(super::mesh_check::Linearised::bends(
+                level,
+                j,
+                &names[..n],
+                &values[..n],
+            ));
+        }
+        self.stage_errors = match super::uncertainty::at_optimum(seen, p) {
+            Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
+            None => Vec::new(),
+        };
+        if !off_axis {
+            self.stage_errors.push(super::uncertainty::ParamError {
+                name: names[2].into(),
+                value: b.twist,
+                std_error: None,
+                basis: "assumed",
+                determined: false,
+            });
+        }
+    }
+}
+
+/// The rigidities at the stage's variables p = ln(B/B⁰): warp, weft and, with an off-axis
+/// bend, twist; without one the twist follows warp and weft at the bias ratio.
+#[derive(Clone, Copy)]
+struct Rigidity {
+    b0: BendingRigidity,
+    off_axis: bool,
+    ratio: f64,
+}
+
+impl Rigidity {
+    /// The number of variables.
+    fn n(&self) -> usize {
+        if self.off_axis {
+            3
+        } else {
+            2
+        }
+    }
+
+    fn at(&self, q: &[f64]) -> BendingRigidity {
+        let b0 = self.b0;
+        let (warp, weft) = (b0.warp * q[0].exp(), b0.weft * q[1].exp());
+        let twist = if self.off_axis {
+            b0.twist * q[2].exp()
+        } else {
+            twist_following(warp, weft, self.ratio)
+        };
+        BendingRigidity { warp, weft, twist }
+    }
+}
+
+/// The bending stage's problem: the cantilevers solved at the rigidities of q, their relative
+/// drape-angle errors and ∂/∂q, every evaluation remembered.
+struct BendProblem<'a> {
+    rigs: &'a mut Vec<BendRig>,
+    bends: &'a [BendTest],
+    law: Orthotropic,
+    tau: f64,
+    /// the law's parameter count (the rigidities' sensitivities follow its own)
+    nlaw: usize,
+    rigidity: Rigidity,
+    evals: usize,
+    newton: usize,
+    seen: super::uncertainty::Seen,
+}
+
+impl BendProblem<'_> {
+    fn eval(&mut self, q: &[f64], jac: bool) -> Result<Evaluation, SceneError> {
+        let (law, tau, nlaw) = (&self.law, self.tau, self.nlaw);
+        let (n, off_axis, ratio) = (
+            self.rigidity.n(),
+            self.rigidity.off_axis,
+            self.rigidity.ratio,
+        );
+        let b = self.rigidity.at(q);
+        let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = self
+            .rigs
+            .par_iter_mut()
+            .map(|rig| {
+                rig.set_material(law, tau)?;
+                rig.set_bending(Some(b));
+                rig.run(jac)
+            })
+            .collect();
+        let (mut r, mut j) = (Vec::new(), Vec::new());
+        for (pt, t) in runs.into_iter().zip(self.bends) {
+            let pt = pt?;
+            self.evals += 1;
+            self.newton += pt.report.iterations;
+            r.push((pt.drape_angle_deg - t.drape_angle_deg) / t.drape_angle_deg);
+            if jac {
+                let d = &pt.dangle[nlaw + 1..nlaw + 4];
+                let mut row = vec![b.warp * d[0], b.weft * d[1]];
+                if off_axis {
+                    row.push(b.twist * d[2]);
+                } else {
+                    // the twist follows warp and weft
+                    let (tw, tf) = b.twist_rates(ratio);
+                    row[0] += b.warp * tw * d[2];
+                    row[1] += b.weft * tf * d[2];
+                }
+                j.push(row.iter().map(|v| v / t.drape_angle_deg).collect());
+            }
+        }
+        let e = to_evaluation(r, j, n, jac);
+        self.seen
+            .push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
+        Ok(e)
     }
 }
 

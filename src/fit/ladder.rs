@@ -34,63 +34,13 @@ pub(super) fn ladder(
         let from = meshes.last().copied().unwrap_or(level);
         // is this level worth it? the last solved refit change, carried one level finer
         if let (Some(m), true) = (&last_check, li >= 2) {
-            let estimate = m.next_level(f.mesh_order());
-            if estimate.passes() {
-                let note = format!(
-                    "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
-                    level.0, level.1, from.0, from.1, m.parameter,
-                    100.0 * estimate.change, 100.0 * estimate.curve_change,
-                    100.0 * m.change, 100.0 * m.curve_change, f.mesh_order()
-                );
-                f.say(&note);
-                f.notes.push(note);
+            if skipped_by_estimate(f, m, from, level) {
                 break;
             }
         }
         f.pin_yarns();
         if let Some(prev) = &previous {
-            let now = f.fitted_forces(&all, level)?;
-            let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
-            let change = super::mean_abs_finite(&d);
-            f.say(&format!(
-                "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
-                from.0,
-                from.1,
-                100.0 * change,
-                level.0,
-                level.1
-            ));
-            // a doubling: the refit's parameter change, solved (the forces just solved
-            // are the check's defect); otherwise the forces' change decides
-            let check = if level == (2 * from.0, 2 * from.1) {
-                f.refit_change(from)?
-            } else {
-                None
-            };
-            if let Some(m) = &check {
-                f.say(&format!(
-                    "refitting the {}×{} fit on {}×{} would change {} by {:.2} % and its curves by {:.2} % (first-order refit, measured)",
-                    from.0, from.1, level.0, level.1,
-                    if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
-                    100.0 * m.change, 100.0 * m.curve_change
-                ));
-            }
-            let skip = match &check {
-                Some(m) => m.passes().then(|| {
-                    format!(
-                        "meshes from {}×{} on skipped: refitting the {}×{} fit on {}×{} would change {} by only {:.2} % and its curves by {:.2} % (first-order refit; below 1 % and 0.3 %)",
-                        level.0, level.1, from.0, from.1, level.0, level.1,
-                        if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
-                        100.0 * m.change, 100.0 * m.curve_change
-                    )
-                }),
-                None => (change < opts.skip_tol).then(|| {
-                    format!(
-                        "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
-                        level.0, level.1, from.0, from.1, 100.0 * change, 100.0 * opts.skip_tol
-                    )
-                }),
-            };
+            let (skip, check) = refinement_check(f, prev, &all, from, level)?;
             if let Some(note) = skip {
                 f.say(&note);
                 f.notes.push(note);
@@ -100,64 +50,8 @@ pub(super) fn ladder(
             last_check = check;
         }
         meshes.push(level);
-        for k in 0..3 {
-            if strips[k].is_empty() {
-                continue;
-            }
-            // a stage the last refinement left unchanged is not refitted (its law stays)
-            if let Some(moved) = last_check.as_ref().map(|m| m.stage_change(maps[k].dir)) {
-                if li > 0 && moved < STAGE_UNCHANGED {
-                    f.say(&format!(
-                        "{} stage not refitted on {}×{}: refining changed its stiffness and tangents by {:.3} % at most (below {:.2} %)",
-                        maps[k].dir.name(), level.0, level.1, 100.0 * moved, 100.0 * STAGE_UNCHANGED
-                    ));
-                    continue;
-                }
-            }
-            if li > 0 && k < 2 && sets.joint.as_ref().is_some_and(|j| !j[k].is_empty()) {
-                // with the joint sweep a finer level refits the yarn stiffness over the joint
-                // strips; η's shape stays the first level's (the mesh check measures it)
-                f.joint_stiffness(maps[k], k, sets, level)?;
-                f.keep_rising(maps[k].dir);
-                continue;
-            }
-            let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
-                // the homogeneous strip models a clamped bias strip poorly: choose the shear
-                // degree on the shell model itself
-                f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
-            } else {
-                f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
-                    .expect("a stage that raises no degree always runs")
-            };
-            if k == 2 && li == 0 {
-                // then, with the degree chosen, whether the tension–shear coupling pays
-                let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
-                maps[2] = map;
-                range = r;
-                super::joint::without_sweep_if_coupled(f, sets);
-            }
-            // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
-            if let Some((lo, hi)) = range {
-                let law = &mut f.law;
-                let msg = match k {
-                    0 => {
-                        law.cutoffs.e11 = (0.0, 0.95 * hi[0]);
-                        format!("cut-off Ẽ11 ≤ {:.4}", law.cutoffs.e11.1)
-                    }
-                    1 => {
-                        law.cutoffs.e22 = (0.0, 0.95 * hi[1]);
-                        format!("cut-off Ẽ22 ≤ {:.4}", law.cutoffs.e22.1)
-                    }
-                    _ => {
-                        let e12 = 0.95 * hi[2].abs().max(lo[2].abs());
-                        law.cutoffs.e12 = (-e12, e12);
-                        format!("cut-off |Ẽ12| ≤ {e12:.4}")
-                    }
-                };
-                f.say(&msg);
-            }
-            f.keep_rising(maps[k].dir);
-        }
+        let check = last_check.as_ref();
+        fit_level(f, maps, sets, strips, (li, level), check, shear_candidates)?;
         if li == 0 && sets.joint.is_some() {
             // the joint sweep: each yarn stiffness over the strips it moves, then the shear
             // given them
@@ -179,4 +73,163 @@ pub(super) fn ladder(
         }
     }
     Ok(meshes)
+}
+
+/// Whether the levels from `level` on are skipped (and said so): the last solved refit change
+/// `m`, carried one level finer, passes.
+fn skipped_by_estimate(
+    f: &mut Fitter,
+    m: &MeshCheck,
+    from: (usize, usize),
+    level: (usize, usize),
+) -> bool {
+    let estimate = m.next_level(f.mesh_order());
+    if estimate.passes() {
+        let note = format!(
+            "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
+            level.0, level.1, from.0, from.1, m.parameter,
+            100.0 * estimate.change, 100.0 * estimate.curve_change,
+            100.0 * m.change, 100.0 * m.curve_change, f.mesh_order()
+        );
+        f.say(&note);
+        f.notes.push(note);
+        return true;
+    }
+    false
+}
+
+/// What refining the fit on `from` to `level` changes: the fitted forces (`prev` on `from`,
+/// over the strips `all`) and, for a doubling, the refit's parameter change, solved. Returns
+/// the note skipping the levels from `level` on when the change is too small to refit for,
+/// and the refit change.
+fn refinement_check(
+    f: &mut Fitter,
+    prev: &[f64],
+    all: &[usize],
+    from: (usize, usize),
+    level: (usize, usize),
+) -> Result<(Option<String>, Option<MeshCheck>), FitError> {
+    let opts = f.opts;
+    let now = f.fitted_forces(all, level)?;
+    let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
+    let change = super::mean_abs_finite(&d);
+    f.say(&format!(
+        "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
+        from.0,
+        from.1,
+        100.0 * change,
+        level.0,
+        level.1
+    ));
+    // a doubling: the refit's parameter change, solved (the forces just solved
+    // are the check's defect); otherwise the forces' change decides
+    let check = if level == (2 * from.0, 2 * from.1) {
+        f.refit_change(from)?
+    } else {
+        None
+    };
+    if let Some(m) = &check {
+        f.say(&format!(
+            "refitting the {}×{} fit on {}×{} would change {} by {:.2} % and its curves by {:.2} % (first-order refit, measured)",
+            from.0, from.1, level.0, level.1,
+            if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
+            100.0 * m.change, 100.0 * m.curve_change
+        ));
+    }
+    let skip = match &check {
+        Some(m) => m.passes().then(|| {
+            format!(
+                "meshes from {}×{} on skipped: refitting the {}×{} fit on {}×{} would change {} by only {:.2} % and its curves by {:.2} % (first-order refit; below 1 % and 0.3 %)",
+                level.0, level.1, from.0, from.1, level.0, level.1,
+                if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
+                100.0 * m.change, 100.0 * m.curve_change
+            )
+        }),
+        None => (change < opts.skip_tol).then(|| {
+            format!(
+                "meshes from {}×{} on skipped: they change the {}×{} fit's forces by only {:.3} % (below {:.2} %)",
+                level.0, level.1, from.0, from.1, 100.0 * change, 100.0 * opts.skip_tol
+            )
+        }),
+    };
+    Ok((skip, check))
+}
+
+/// The tensile stages on one level (`li`-th of the ladder, mesh `level`): each direction's
+/// stage unless the last refinement (`last_check`) left it unchanged; on the first level the
+/// shear degree chosen on the shell and the coupling trial, and the cut-offs set.
+fn fit_level(
+    f: &mut Fitter,
+    maps: &mut [StageMap],
+    sets: &mut StageSets,
+    strips: &[Vec<usize>],
+    (li, level): (usize, (usize, usize)),
+    last_check: Option<&MeshCheck>,
+    shear_candidates: &[Vec<f64>],
+) -> Result<(), FitError> {
+    for k in 0..3 {
+        if strips[k].is_empty() {
+            continue;
+        }
+        // a stage the last refinement left unchanged is not refitted (its law stays)
+        if let Some(moved) = last_check.map(|m| m.stage_change(maps[k].dir)) {
+            if li > 0 && moved < STAGE_UNCHANGED {
+                f.say(&format!(
+                    "{} stage not refitted on {}×{}: refining changed its stiffness and tangents by {:.3} % at most (below {:.2} %)",
+                    maps[k].dir.name(), level.0, level.1, 100.0 * moved, 100.0 * STAGE_UNCHANGED
+                ));
+                continue;
+            }
+        }
+        if li > 0 && k < 2 && sets.joint.as_ref().is_some_and(|j| !j[k].is_empty()) {
+            // with the joint sweep a finer level refits the yarn stiffness over the joint
+            // strips; η's shape stays the first level's (the mesh check measures it)
+            f.joint_stiffness(maps[k], k, sets, level)?;
+            f.keep_rising(maps[k].dir);
+            continue;
+        }
+        let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+            // the homogeneous strip models a clamped bias strip poorly: choose the shear
+            // degree on the shell model itself
+            f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
+        } else {
+            f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
+                .expect("a stage that raises no degree always runs")
+        };
+        if k == 2 && li == 0 {
+            // then, with the degree chosen, whether the tension–shear coupling pays
+            let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
+            maps[2] = map;
+            range = r;
+            super::joint::without_sweep_if_coupled(f, sets);
+        }
+        // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
+        if let Some((lo, hi)) = range {
+            set_cutoff(f, k, lo, hi);
+        }
+        f.keep_rising(maps[k].dir);
+    }
+    Ok(())
+}
+
+/// Direction `k`'s cut-off at 95 % of the largest strain its tests exercised (`lo`, `hi`:
+/// the strain range, Ẽ11, Ẽ22, Ẽ12), said.
+fn set_cutoff(f: &mut Fitter, k: usize, lo: [f64; 3], hi: [f64; 3]) {
+    let law = &mut f.law;
+    let msg = match k {
+        0 => {
+            law.cutoffs.e11 = (0.0, 0.95 * hi[0]);
+            format!("cut-off Ẽ11 ≤ {:.4}", law.cutoffs.e11.1)
+        }
+        1 => {
+            law.cutoffs.e22 = (0.0, 0.95 * hi[1]);
+            format!("cut-off Ẽ22 ≤ {:.4}", law.cutoffs.e22.1)
+        }
+        _ => {
+            let e12 = 0.95 * hi[2].abs().max(lo[2].abs());
+            law.cutoffs.e12 = (-e12, e12);
+            format!("cut-off |Ẽ12| ≤ {e12:.4}")
+        }
+    };
+    f.say(&msg);
 }

@@ -22,6 +22,8 @@
 //! [`super::uncertainty`]): an undetermined exponent can move by any amount without any curve
 //! noticing, and the curves' change says that.
 
+mod notes;
+
 use super::{FitError, Fitter};
 use crate::material::BendingRigidity;
 use nalgebra::{DMatrix, DVector};
@@ -202,6 +204,83 @@ fn gauss_newton_step(j: &DMatrix<f64>, dr: &[f64]) -> Option<DVector<f64>> {
 }
 
 impl MeshCheck {
+    /// A check about `mesh`, solved on `solved_on`, with nothing changed yet.
+    fn empty(mesh: (usize, usize), solved_on: (usize, usize)) -> Self {
+        MeshCheck {
+            mesh,
+            solved_on,
+            change: 0.0,
+            parameter: String::new(),
+            changes: Vec::new(),
+            law_change: 0.0,
+            law_parameter: String::new(),
+            curve_change: 0.0,
+            curve: String::new(),
+            angle_change_deg: None,
+        }
+    }
+
+    /// Takes in a stage's curves after its refit, Δr + J δ (unweighted, curve by curve):
+    /// the largest mean change of a tensile curve (`labels` name them), the largest drape
+    /// angle change of a bend (`scale`: the target angles).
+    fn curves_after(
+        &mut self,
+        lin: &Linearised,
+        dr: &[f64],
+        delta: &DVector<f64>,
+        labels: &[String],
+        scale: &[f64],
+    ) {
+        let after = DVector::from_column_slice(dr) + &lin.j * delta;
+        let mut k = 0;
+        for (c, &n) in lin.lens.iter().enumerate() {
+            let w = match lin.probe {
+                Probe::Tensile(_) => 1.0 / (n as f64).sqrt(),
+                Probe::Bends => 1.0,
+            };
+            let mean = after.rows(k, n).iter().map(|v| v.abs()).sum::<f64>() / (w * n as f64);
+            match lin.probe {
+                Probe::Tensile(_) if mean > self.curve_change => {
+                    self.curve_change = mean;
+                    self.curve = labels[c].clone();
+                }
+                Probe::Bends => {
+                    let deg = mean * scale[c];
+                    let a = self.angle_change_deg.get_or_insert(0.0);
+                    *a = a.max(deg);
+                }
+                _ => {}
+            }
+            k += n;
+        }
+    }
+
+    /// Takes in every parameter's relative change (name, change, counted in `change`).
+    fn take_changes(&mut self, changes: Vec<(String, f64, bool)>) {
+        // the thickness stage rescales every membrane stiffness by τ⁰/τ (a·τ kept): to first
+        // order their relative changes lose the thickness's
+        let tau = changes
+            .iter()
+            .find(|c| c.0 == "thickness_mm")
+            .map_or(0.0, |c| c.1);
+        for (name, rel, counted) in changes {
+            let rel = if name.ends_with("_pa") || name.contains("_tangent_at_") {
+                rel - tau
+            } else {
+                rel
+            };
+            if counted && rel.abs() > self.change {
+                self.change = rel.abs();
+                self.parameter = name.clone();
+            }
+            if !counted && rel.abs() > self.law_change {
+                self.law_change = rel.abs();
+                self.law_parameter = name.clone();
+            }
+            self.changes.push((name, rel));
+        }
+    }
+
     /// The criterion of a mesh-independent fit: no determined parameter moves by 1 %, no
     /// fitted curve by 0.3 %, no drape angle by 0.1°.
     pub fn passes(&self) -> bool {
@@ -368,55 +447,13 @@ impl Fitter<'_> {
             "mesh check: every fitted strip and bend again on {}x{}",
             solved_on.0, solved_on.1
         ));
-        let mut out = MeshCheck {
-            mesh: finer,
-            solved_on,
-            change: 0.0,
-            parameter: String::new(),
-            changes: Vec::new(),
-            law_change: 0.0,
-            law_parameter: String::new(),
-            curve_change: 0.0,
-            curve: String::new(),
-            angle_change_deg: None,
-        };
+        let mut out = MeshCheck::empty(finer, solved_on);
         // (name, relative change, counted in `change`)
         let mut changes: Vec<(String, f64, bool)> = Vec::new();
         for lin in &lins {
             let (dr, labels, scale) = match &lin.probe {
                 Probe::Tensile(strips) => self.tensile_defect(strips, last, solved_on)?,
-                Probe::Bends => {
-                    let at_last = self.bend_angles.clone();
-                    let fine = self.drape_angles(solved_on)?;
-                    let targets: Vec<f64> =
-                        self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
-                    let mut dr: Vec<f64> = (0..fine.len())
-                        .map(|k| factor * (fine[k] - at_last[k]) / targets[k])
-                        .collect();
-                    if lin.names == ["thickness_mm"] {
-                        // the paper's section: a bend's rigidity is (a·τ)·τ²/12, and the tensile
-                        // stages move a·τ; J is ∂r/∂ln τ at fixed a·τ, i.e. 2 ∂r/∂ln B
-                        let of =
-                            |key: &str| changes.iter().find(|c| c.0 == key).map_or(0.0, |c| c.1);
-                        let (warp, weft) = (of("a11_pa"), of("a22_pa"));
-                        for (k, b) in self.data.bend.iter().enumerate().take(dr.len()) {
-                            let m = if (b.angle_deg - 90.0).abs() < 1e-9 {
-                                warp
-                            } else if b.angle_deg.abs() < 1e-9 {
-                                weft
-                            } else {
-                                0.5 * (warp + weft)
-                            };
-                            dr[k] += 0.5 * lin.j[(k, 0)] * m;
-                        }
-                    }
-                    let labels = self
-                        .data
-                        .bend
-                        .iter()
-                        .map(|b| format!("bend {}°", b.angle_deg));
-                    (dr, labels.collect(), targets)
-                }
+                Probe::Bends => self.bend_defect(lin, solved_on, factor, &changes)?,
             };
             let dr: Vec<f64> = match lin.probe {
                 Probe::Tensile(_) => dr.iter().map(|v| factor * v).collect(),
@@ -436,119 +473,51 @@ impl Fitter<'_> {
                     changes.push((name.clone(), rel, lin.counts[k]));
                 }
             }
-            // the curves after the refit: Δr + J δ, unweighted, curve by curve
-            let after = DVector::from_column_slice(&dr) + &lin.j * &delta;
-            let mut k = 0;
-            for (c, &n) in lin.lens.iter().enumerate() {
-                let w = match lin.probe {
-                    Probe::Tensile(_) => 1.0 / (n as f64).sqrt(),
-                    Probe::Bends => 1.0,
-                };
-                let mean = after.rows(k, n).iter().map(|v| v.abs()).sum::<f64>() / (w * n as f64);
-                match lin.probe {
-                    Probe::Tensile(_) if mean > out.curve_change => {
-                        out.curve_change = mean;
-                        out.curve = labels[c].clone();
-                    }
-                    Probe::Bends => {
-                        let deg = mean * scale[c];
-                        let a = out.angle_change_deg.get_or_insert(0.0);
-                        *a = a.max(deg);
-                    }
-                    _ => {}
-                }
-                k += n;
-            }
+            out.curves_after(lin, &dr, &delta, &labels, &scale);
         }
-        // the thickness stage rescales every membrane stiffness by τ⁰/τ (a·τ kept): to first
-        // order their relative changes lose the thickness's
-        let tau = changes
-            .iter()
-            .find(|c| c.0 == "thickness_mm")
-            .map_or(0.0, |c| c.1);
-        for (name, rel, counted) in changes {
-            let rel = if name.ends_with("_pa") || name.contains("_tangent_at_") {
-                rel - tau
-            } else {
-                rel
-            };
-            if counted && rel.abs() > out.change {
-                out.change = rel.abs();
-                out.parameter = name.clone();
-            }
-            if !counted && rel.abs() > out.law_change {
-                out.law_change = rel.abs();
-                out.law_parameter = name.clone();
-            }
-            out.changes.push((name, rel));
-        }
+        out.take_changes(changes);
         Ok(Some(out))
     }
 
-    /// The check's line in the notes, a warning when the fit is not mesh-independent (a
-    /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
-    pub(super) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
-        let bad = !m.passes();
-        let law = if m.law_change >= MESH_PARAM_TOL {
-            format!(
-                "; η's weights and exponents (and a coupling's factors) one by one by up to {:.0} % ({}), which the curves do not pin down",
-                100.0 * m.law_change,
-                m.law_parameter
-            )
-        } else {
-            String::new()
-        };
-        let how = if m.solved_on == m.mesh {
-            format!("solved on {}x{}", m.mesh.0, m.mesh.1)
-        } else {
-            format!(
-                "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
-                m.solved_on.0,
-                m.solved_on.1,
-                self.mesh_order(),
-                m.mesh.0,
-                m.mesh.1
-            )
-        };
-        let angles = m
-            .angle_change_deg
-            .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
-        let own = if self.prep.strips.iter().any(|s| s.refine > 0) {
-            " (and every strip refined on its own mesh once more)"
-        } else {
-            ""
-        };
-        let line = format!(
-            "{}mesh check: refining {}x{} to {}x{}{own} would change {} by {:.2} % (the largest change of a determined stiffness, thickness or rigidity, or of the law's tangent stiffness across the tested range), the fitted curves by {:.2} % ({}){angles} (first-order refit, {how}){law}",
-            if bad { "warning: " } else { "" },
-            last.0,
-            last.1,
-            m.mesh.0,
-            m.mesh.1,
-            if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
-            100.0 * m.change,
-            100.0 * m.curve_change,
-            if m.curve.is_empty() { "-" } else { &m.curve },
-        );
-        // a curve alone failing, where `own` meshes left it: the strict rule refines its strip
-        let curve_only = m.change < MESH_PARAM_TOL
-            && m.angle_change_deg.is_none_or(|a| a < MESH_ANGLE_TOL_DEG)
-            && self.opts.test_meshes == super::TestMeshes::Own;
-        let line = if bad && curve_only {
-            format!("{line}: the fit is not mesh-independent; --test-meshes strict refines the strip of that curve (or add the finer level, --mesh-ladder)")
-        } else if bad {
-            format!("{line}: the fit is not mesh-independent; add the finer level (--mesh-ladder)")
-        } else {
-            line
-        };
-        let each: Vec<String> = m
-            .changes
-            .iter()
-            .map(|(n, c)| format!("{n} {:+.2} %", 100.0 * c))
+    /// Δr of the bends' relative drape-angle errors from the last level to `solved_on` (times
+    /// `factor`), with a label per bend and the target angles; a thickness stage's carries the
+    /// membrane stiffnesses' `changes` so far (the tensile stages move a·τ).
+    #[allow(clippy::type_complexity)]
+    fn bend_defect(
+        &mut self,
+        lin: &Linearised,
+        solved_on: (usize, usize),
+        factor: f64,
+        changes: &[(String, f64, bool)],
+    ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
+        let at_last = self.bend_angles.clone();
+        let fine = self.drape_angles(solved_on)?;
+        let targets: Vec<f64> = self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
+        let mut dr: Vec<f64> = (0..fine.len())
+            .map(|k| factor * (fine[k] - at_last[k]) / targets[k])
             .collect();
-        self.say(&format!("mesh check, each change: {}", each.join(", ")));
-        self.say(&line);
-        self.notes.push(line);
+        if lin.names == ["thickness_mm"] {
+            // the paper's section: a bend's rigidity is (a·τ)·τ²/12, and the tensile
+            // stages move a·τ; J is ∂r/∂ln τ at fixed a·τ, i.e. 2 ∂r/∂ln B
+            let of = |key: &str| changes.iter().find(|c| c.0 == key).map_or(0.0, |c| c.1);
+            let (warp, weft) = (of("a11_pa"), of("a22_pa"));
+            for (k, b) in self.data.bend.iter().enumerate().take(dr.len()) {
+                let m = if (b.angle_deg - 90.0).abs() < 1e-9 {
+                    warp
+                } else if b.angle_deg.abs() < 1e-9 {
+                    weft
+                } else {
+                    0.5 * (warp + weft)
+                };
+                dr[k] += 0.5 * lin.j[(k, 0)] * m;
+            }
+        }
+        let labels = self
+            .data
+            .bend
+            .iter()
+            .map(|b| format!("bend {}°", b.angle_deg));
+        Ok((dr, labels.collect(), targets))
     }
 
     /// Δr of the tensile residuals over `strips` from `last` to `finer` at the fitted
@@ -588,91 +557,4 @@ impl Fitter<'_> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// For a model linear in its parameters the step is the exact refit: r(p) = A p − b on
-    /// the coarse mesh and A p − b′ on the fine one, optimum moves by (AᵀA)⁻¹Aᵀ(b′ − b).
-    #[test]
-    fn the_step_is_the_exact_refit_of_a_linear_model() {
-        let a = DMatrix::from_row_slice(4, 2, &[1.0, 0.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0]);
-        let b = DVector::from_column_slice(&[0.1, 1.2, 1.9, 3.2]);
-        let b2 = DVector::from_column_slice(&[0.15, 1.22, 1.97, 3.3]);
-        let solve = |rhs: &DVector<f64>| {
-            (a.transpose() * &a)
-                .cholesky()
-                .unwrap()
-                .solve(&(a.transpose() * rhs))
-        };
-        let (p, p2) = (solve(&b), solve(&b2));
-        // Δr at fixed p: (A p − b′) − (A p − b) = b − b′
-        let dr: Vec<f64> = (&b - &b2).iter().copied().collect();
-        let delta = gauss_newton_step(&a, &dr).unwrap();
-        assert!((&p + &delta - &p2).norm() < 1e-12);
-    }
-
-    fn check(changes: &[(&str, f64)], curves: f64) -> MeshCheck {
-        let changes: Vec<(String, f64)> =
-            changes.iter().map(|(n, c)| (n.to_string(), *c)).collect();
-        let (parameter, change) = changes
-            .iter()
-            .filter(|(n, _)| n.ends_with("_pa") || n.contains("_tangent_at_"))
-            .fold((String::new(), 0.0), |m, (n, c)| {
-                if c.abs() > m.1 {
-                    (n.clone(), c.abs())
-                } else {
-                    m
-                }
-            });
-        MeshCheck {
-            mesh: (16, 24),
-            solved_on: (16, 24),
-            change,
-            parameter,
-            changes,
-            law_change: 0.0,
-            law_parameter: String::new(),
-            curve_change: curves,
-            curve: "bias-1.csv".into(),
-            angle_change_deg: Some(0.02),
-        }
-    }
-
-    /// The ladder's decisions: the 1 % / 0.3 % / 0.1° rule of `MeshCheck::passes`, its
-    /// carrying one level finer at order q, and each stage's own change (as a·τ: the
-    /// thickness's rescaling of a added back).
-    #[test]
-    fn the_ladder_decides_by_the_rule_and_by_each_stage() {
-        use super::super::map::Direction;
-        let m = check(
-            &[
-                ("a11_pa", -0.002),
-                ("warp_tangent_at_50pct", -0.0021),
-                ("g12_pa", 0.044),
-                ("bias_tangent_at_100pct", 0.03),
-                ("a22_pa", -0.0019),
-                ("thickness_mm", 0.002),
-            ],
-            0.009,
-        );
-        assert!(!m.passes());
-        assert_eq!(m.parameter, "g12_pa");
-        // the warp and weft strips determine a·τ: a −0.2 % change of a with τ +0.2 % is none
-        assert!(m.stage_change(Direction::Warp) < 2e-4);
-        assert!(m.stage_change(Direction::Weft) < 2e-4);
-        assert!((m.stage_change(Direction::Shear) - 0.046).abs() < 1e-12);
-        // one level finer at order 2: a quarter of every change
-        let next = m.next_level(2.0);
-        assert_eq!(next.mesh, (32, 48));
-        assert!((next.change - 0.011).abs() < 1e-12 && !next.passes());
-        let further = next.next_level(2.0);
-        assert!(further.passes(), "{further:?}");
-        // a stage the check did not see is never taken as unchanged
-        let only_warp = check(&[("a11_pa", 1e-5)], 0.0);
-        assert_eq!(only_warp.stage_change(Direction::Shear), f64::INFINITY);
-        // a drape angle moving by 0.1° fails the rule on its own
-        let mut bend = check(&[("a11_pa", 1e-5)], 0.0);
-        bend.angle_change_deg = Some(0.1);
-        assert!(!bend.passes());
-    }
-}
+mod tests;

@@ -19,8 +19,11 @@
 //! solves; without a measured force G12 stays assumed and a warning says why.
 
 use super::{FitError, Fitter};
+use crate::dataset::FabricDataset;
 use crate::fit::shape_target::ShapeTarget;
 use crate::fit::tri::SHAPE_TRUST;
+use crate::material::FabricMaterial;
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// The note a fit without an off-axis test carries (its start says why G12 is not fitted).
@@ -80,75 +83,24 @@ impl Fitter<'_> {
     /// there are none. The caller runs it only where no off-axis strip fitted the shear.
     pub(super) fn shapes_stage(&mut self) -> Result<bool, FitError> {
         let t0 = Instant::now();
-        let mut targets = Vec::new();
-        for sh in self.data.shapes.iter() {
-            let t = ShapeTarget::new(sh, 1).map_err(FitError::Data)?;
-            if t.fitted() && t.shears() {
-                targets.push(t);
-            }
-        }
+        let targets = shearing_targets(self.data)?;
         if targets.is_empty() {
             return Ok(false);
         }
         let g0 = self.law.g12;
-        let mut evaluations = 0;
-        let material = self.material();
-        // every solve's residuals by G12, so that the forces' scan reuses the shapes' solves
-        let mut solved: std::collections::HashMap<u64, Vec<Vec<f64>>> = Default::default();
-        let mut fit = |objective: Objective| {
-            minimise_ln(g0, &mut |g12| {
-                let rs = solved.entry(g12.to_bits()).or_insert_with(|| {
-                    let mut m = material.clone();
-                    m.law.g12 = g12;
-                    evaluations += 1;
-                    targets.iter().map(|t| t.residuals_shell(&m)).collect()
-                });
-                let s: f64 = targets
-                    .iter()
-                    .zip(rs.iter())
-                    .flat_map(|(t, r)| {
-                        let r = r.clone();
-                        match (objective, t.test.force) {
-                            (Objective::Shapes, _) => r,
-                            (Objective::Forces, Some(_)) => r[r.len() - 1..].to_vec(),
-                            (Objective::Forces, None) => Vec::new(),
-                        }
-                    })
-                    .map(|r| r * r)
-                    .sum();
-                if s.is_finite() {
-                    s
-                } else {
-                    f64::INFINITY
-                }
-            })
+        let mut scan = ShearScan {
+            targets: &targets,
+            g0,
+            evaluations: 0,
+            material: self.material(),
+            solved: Default::default(),
         };
-        let range = || {
-            let e = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp();
-            format!("{:.3e} to {:.3e} Pa", g0 / e, g0 * e)
+        let Some((g12, f)) = scan.fit(Objective::Shapes) else {
+            return Err(no_solve(g0));
         };
-        let Some((g12, f)) = fit(Objective::Shapes) else {
-            return Err(FitError::Data(format!(
-                "no shear stiffness from {} solves the captured shape(s)' scenes",
-                range()
-            )));
-        };
-        let errors = |g12: f64| -> Vec<f64> {
-            let mut m = material.clone();
-            m.law.g12 = g12;
-            targets.iter().map(|t| t.errors_shell(&m).error).collect()
-        };
-        let at_shapes = errors(g12);
+        let at_shapes = scan.errors(g12);
         let reproduced = at_shapes.iter().all(|e| *e < SHAPE_TRUST);
         let with_force = targets.iter().any(|t| t.test.force.is_some());
-        let describe = |e: &[f64]| -> String {
-            targets
-                .iter()
-                .zip(e)
-                .map(|(t, e)| format!("{} {:.1} %", t.test.obj.display(), 100.0 * e))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
         let (g12, f, basis) = if reproduced {
             (g12, f, "shape(s) and force(s)")
         } else if with_force {
@@ -157,39 +109,37 @@ impl Fitter<'_> {
             // 24 × 24 against 12 × 12: positions 181 % apart, forces 0.4 %)
             self.notes.push(format!(
                 "the shell does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %; buckled wrinkles take another branch on this mesh), so G12 is fitted to the measured force(s) alone",
-                describe(&at_shapes),
+                describe(&targets, &at_shapes),
                 100.0 * SHAPE_TRUST
             ));
-            let Some((g, f)) = fit(Objective::Forces) else {
-                return Err(FitError::Data(format!(
-                    "no shear stiffness from {} solves the captured shape(s)' scenes",
-                    range()
-                )));
+            let Some((g, f)) = scan.fit(Objective::Forces) else {
+                return Err(no_solve(g0));
             };
             (g, f, "measured force(s)")
         } else {
             self.notes.push(format!(
                 "WARNING: the model does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %) and no force was measured: G12 stays assumed",
-                describe(&at_shapes),
+                describe(&targets, &at_shapes),
                 100.0 * SHAPE_TRUST
             ));
-            self.stats.evaluations += evaluations;
+            self.stats.evaluations += scan.evaluations;
             self.time_stage("shapes", t0);
             return Ok(false);
         };
         self.law.g12 = g12;
+        let evaluations = scan.evaluations;
         self.stats.evaluations += evaluations;
-        let errors = errors(g12);
+        let errors = scan.errors(g12);
         self.say(&format!(
             "shapes stage: G12 = {g12:.4e} Pa from {} captured shape(s)' {basis} (assumed {g0:.4e} Pa), shape error {} ({evaluations} scene solves, objective {f:.3e})",
             targets.len(),
-            describe(&errors)
+            describe(&targets, &errors)
         ));
         let edge = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp() * (1.0 - BRACKET);
         if g12 >= g0 * edge || g12 <= g0 / edge {
             self.notes.push(format!(
                 "WARNING: the fitted G12 lies at the end of the range searched ({}): the shape(s) may need a shear stiffness outside it",
-                range()
+                scan_range(g0)
             ));
         }
         self.notes.push(format!(
@@ -198,5 +148,95 @@ impl Fitter<'_> {
         ));
         self.time_stage("shapes", t0);
         Ok(true)
+    }
+}
+
+/// The dataset's fitted shapes whose scenes shear the sheet.
+fn shearing_targets(data: &FabricDataset) -> Result<Vec<ShapeTarget>, FitError> {
+    let mut targets = Vec::new();
+    for sh in data.shapes.iter() {
+        let t = ShapeTarget::new(sh, 1).map_err(FitError::Data)?;
+        if t.fitted() && t.shears() {
+            targets.push(t);
+        }
+    }
+    Ok(targets)
+}
+
+/// The range of G12 the scan from `g0` searches, in words.
+fn scan_range(g0: f64) -> String {
+    let e = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp();
+    format!("{:.3e} to {:.3e} Pa", g0 / e, g0 * e)
+}
+
+/// The error of a scan that found no G12 whose scenes solve.
+fn no_solve(g0: f64) -> FitError {
+    FitError::Data(format!(
+        "no shear stiffness from {} solves the captured shape(s)' scenes",
+        scan_range(g0)
+    ))
+}
+
+/// Each target's shape error `e`, with its OBJ file, in words.
+fn describe(targets: &[ShapeTarget], e: &[f64]) -> String {
+    targets
+        .iter()
+        .zip(e)
+        .map(|(t, e)| format!("{} {:.1} %", t.test.obj.display(), 100.0 * e))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The shapes' scenes solved over G12 around `g0`, every solve's residuals kept by G12 (the
+/// forces' scan reuses the shapes' solves).
+struct ShearScan<'a> {
+    targets: &'a [ShapeTarget],
+    g0: f64,
+    evaluations: usize,
+    material: FabricMaterial,
+    solved: HashMap<u64, Vec<Vec<f64>>>,
+}
+
+impl ShearScan<'_> {
+    /// The G12 minimising the objective, and the objective there ([`minimise_ln`]).
+    fn fit(&mut self, objective: Objective) -> Option<(f64, f64)> {
+        let (targets, material) = (self.targets, &self.material);
+        let (solved, evaluations) = (&mut self.solved, &mut self.evaluations);
+        minimise_ln(self.g0, &mut |g12| {
+            let rs = solved.entry(g12.to_bits()).or_insert_with(|| {
+                let mut m = material.clone();
+                m.law.g12 = g12;
+                *evaluations += 1;
+                targets.iter().map(|t| t.residuals_shell(&m)).collect()
+            });
+            let s: f64 = targets
+                .iter()
+                .zip(rs.iter())
+                .flat_map(|(t, r)| {
+                    let r = r.clone();
+                    match (objective, t.test.force) {
+                        (Objective::Shapes, _) => r,
+                        (Objective::Forces, Some(_)) => r[r.len() - 1..].to_vec(),
+                        (Objective::Forces, None) => Vec::new(),
+                    }
+                })
+                .map(|r| r * r)
+                .sum();
+            if s.is_finite() {
+                s
+            } else {
+                f64::INFINITY
+            }
+        })
+    }
+
+    /// Each target's shape error at G12 = `g12`.
+    fn errors(&self, g12: f64) -> Vec<f64> {
+        let mut m = self.material.clone();
+        m.law.g12 = g12;
+        self.targets
+            .iter()
+            .map(|t| t.errors_shell(&m).error)
+            .collect()
     }
 }

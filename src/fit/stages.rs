@@ -2,12 +2,15 @@
 //! tensile stages on the shell model (the thickness stage is in `thickness.rs`, the ladder of
 //! meshes in `ladder.rs`).
 
+mod problem;
+
 use super::map::{beta_to_var, Direction, StageMap};
-use super::optim::{minimize, Evaluation, Method, OptimOptions};
-use super::rigs::curve_residuals;
-use super::surrogate::{homogeneous_fit, mapped_start};
-use super::{to_evaluation, FitError, Fitter, StrainRange, TRIAL_RETRY_ITERATIONS};
-use crate::scene::SceneError;
+use super::optim::OptimReport;
+use super::surrogate::{homogeneous_fit, MappedStart};
+use super::uncertainty::Seen;
+use super::{FitError, Fitter, RigKey, StrainRange};
+use crate::scene::{SceneError, StripRig};
+use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -177,9 +180,62 @@ impl Fitter<'_> {
         mode: StageMode,
         screen: Option<(f64, f64)>,
     ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
-        let raise = mode == StageMode::Raise;
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         let t0 = Instant::now();
+        let mut sp = self.stage_problem(map, strips, level)?;
+        let mut p = self.unsaturated_start(map);
+        let first_level = level == self.opts.ladder[0];
+        let opts = self.stage_options(level, 1e-12, sp.ncurves);
+        if !self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)? {
+            self.time_stage(map.dir.name(), t0);
+            return Ok(None);
+        }
+        let stiffness_first = (first_level || stiffness_only) && !map.c_known;
+        let (rep, dropped) = fit_stage(
+            &mut sp,
+            &self.prep,
+            &mut p,
+            &opts,
+            stiffness_first,
+            stiffness_only,
+        )
+        .map_err(stage_failed(map, level))?;
+        self.add_counts(&sp.counts);
+        map.decode(&p, &mut self.law);
+        let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
+        let shape = self.stage_optimum(&sp, &p, err);
+        let msg = self.stage_line(&sp, &p, (err, shape), &rep);
+        self.say(&msg);
+        if dropped > 0 {
+            self.log_degree(format!(
+                "{}: {dropped} term(s) dropped on {}×{}: under {:.1} % of η' over the tested range",
+                map.dir.name(),
+                level.0,
+                level.1,
+                100.0 * super::plausible::NEGLIGIBLE
+            ));
+        }
+        let range = if strain_range {
+            self.stage_strain_range(map, &mut sp.rigs)?
+        } else {
+            None
+        };
+        for (key, rig) in sp.rigs {
+            self.keep_rig(key, rig);
+        }
+        self.time_stage(map.dir.name(), t0);
+        self.stage_rms = err;
+        Ok(Some((shape, range)))
+    }
+
+    /// A tensile stage's problem: the rigs of its strips on a mesh level, set up for the
+    /// stage's map, with the strips' fitted curves, at the current law and thickness.
+    fn stage_problem<'s>(
+        &mut self,
+        map: StageMap,
+        strips: &'s [usize],
+        level: (usize, usize),
+    ) -> Result<StageProblem<'s>, FitError> {
         let mut rigs = Vec::new();
         for &s in strips {
             let angle = self.prep.strips[s].angle_deg;
@@ -190,108 +246,42 @@ impl Fitter<'_> {
         }
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
         let ncurves: usize = curves.iter().map(Vec::len).sum();
-        let mut p = map.encode_start(&self.law);
-        if p != map.encode(&self.law) {
-            self.say(&format!(
-                "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
-                map.dir.name(),
-                100.0 * super::map::UNSATURATED
-            ));
-        }
-        let base = self.law.clone();
-        let first_level = level == self.opts.ladder[0];
-        let opts = self.stage_options(level, 1e-12, ncurves);
         let lens: Vec<usize> = curves
             .iter()
             .flatten()
             .map(|&c| self.prep.curves[c].points.len())
             .collect();
-        let (mut evals, mut newton, mut unstable, mut solved) = (0, 0, 0, 0);
-        let tau = self.thickness;
-        let prep = &self.prep;
-        // every evaluation's variables and residuals, for the shape error at the optimum
-        let mut seen = super::uncertainty::Seen::new();
-        let mut problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
-            // a point already solved (the start, evaluated for the mapped steps and then by the
-            // minimiser) is not solved again
-            if let Some((_, r, j)) = seen
-                .iter()
-                .rev()
-                .find(|(x, _, j)| x == q && (j.is_some() || !jac))
-            {
-                return Ok(Evaluation {
-                    residuals: r.clone(),
-                    jacobian: if jac { j.clone() } else { None },
-                });
-            }
-            let mut law = base.clone();
-            map.decode(q, &mut law);
-            let (mut r, mut j) = (Vec::new(), Vec::new());
-            // the strips are independent: solved side by side, residuals gathered in order
-            let retry = (evals > 0).then_some(TRIAL_RETRY_ITERATIONS);
-            let runs: Vec<Result<Vec<crate::scene::TensilePoint>, SceneError>> = rigs
-                .par_iter_mut()
-                .map(|(_, rig)| {
-                    rig.set_material(&law, tau)?;
-                    // the stage's first evaluation must succeed; later ones are trials
-                    rig.retry_iterations = retry;
-                    let pts = rig.run(jac);
-                    rig.retry_iterations = None;
-                    pts
-                })
-                .collect();
-            for ((pts, &s), cs) in runs.into_iter().zip(strips).zip(&curves) {
-                let pts = pts.map_err(|e| match e {
-                    SceneError::Solve { stage, source } => SceneError::Solve {
-                        stage: format!("the {}° strip's {stage}", prep.strips[s].angle_deg),
-                        source,
-                    },
-                    other => other,
-                })?;
-                newton += pts.iter().map(|p| p.report.iterations).sum::<usize>();
-                solved += pts.len();
-                unstable += pts.iter().filter(|p| !p.report.stable).count();
-                let forces: Vec<f64> = pts.iter().map(super::rigs::node_force).collect();
-                let d: Vec<Vec<f64>> = if jac {
-                    pts.iter().map(|p| map.chain(q, &law, &p.dforce)).collect()
-                } else {
-                    Vec::new()
-                };
-                for &c in cs {
-                    let nodes = &prep.strips[s].nodes;
-                    let dp = jac.then_some(&d[..]);
-                    curve_residuals(
-                        prep.misfit,
-                        &prep.curves[c].points,
-                        nodes,
-                        &forces,
-                        dp,
-                        &mut r,
-                        &mut j,
-                    );
-                }
-            }
-            evals += 1;
-            let e = to_evaluation(r, j, q.len(), jac);
-            seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
-            Ok(e)
-        };
-        let fail = |source| FitError::Scene {
-            stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
-            source,
-        };
-        // with sensitivities: the strips' parameter tangents then predict the first trial's
-        // equilibria, and the minimiser's first evaluation is this one
-        let e0 = problem(&p, true).map_err(fail)?;
-        let gn_gain = match &e0.jacobian {
-            Some(j) if !first_level && !stiffness_only => {
-                super::optim::gauss_newton_gain(j, &e0.residuals)
-            }
-            _ => 1.0,
-        };
-        let r0 = e0.residuals;
-        let flat: Vec<usize> = curves.iter().flatten().copied().collect();
-        let mut shell = |q: &[f64]| problem(q, false).ok().map(|e| e.residuals);
+        Ok(StageProblem {
+            map,
+            level,
+            base: self.law.clone(),
+            tau: self.thickness,
+            strips,
+            curves,
+            ncurves,
+            lens,
+            rigs,
+            counts: Counts::default(),
+            seen: Seen::new(),
+        })
+    }
+
+    /// The stage's first evaluation and space-mapped start from p (see [`stage_start`]);
+    /// `false` when the trial is given up there (a raised degree whose mapped steps kept no
+    /// proposal, or a `screen`ed trial that gained too little), its work counted, its rigs
+    /// kept and its note logged.
+    fn mapped_stage_start(
+        &mut self,
+        sp: &mut StageProblem,
+        p: &mut Vec<f64>,
+        mode: StageMode,
+        rel_decrease: f64,
+        screen: Option<(f64, f64)>,
+    ) -> Result<bool, FitError> {
+        let (map, level) = (sp.map, sp.level);
+        let fail = stage_failed(map, level);
+        let first_level = level == self.opts.ladder[0];
+        let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         // the stiffness alone needs no start from the homogeneous strip (it is one variable),
         // nor does a finer level's stage whose own Gauss–Newton step, from the Jacobian just
         // solved, is predicted to gain less than the stage asks of an iteration: it starts at
@@ -299,125 +289,123 @@ impl Fitter<'_> {
         // fits are all rejected (predicted gains 0.03–1.8 %; README, "Stages on the shell
         // model"), each a shell evaluation thrown away
         let direct = mode == StageMode::RaiseDirect;
-        let rounds = if direct || stiffness_only || (!first_level && gn_gain < opts.rel_decrease) {
-            0
-        } else {
-            8
+        let rounds = |gn_gain: f64| {
+            if direct || stiffness_only || (!first_level && gn_gain < rel_decrease) {
+                0
+            } else {
+                8
+            }
         };
-        let m = mapped_start(prep, &base, tau, map, &flat, &mut p, r0, rounds, &mut shell);
+        let predict = !first_level && !stiffness_only;
+        let (m, rounds) = stage_start(sp, &self.prep, p, predict, rounds).map_err(fail)?;
         self.stats.bootstrap_evaluations += m.homogeneous_evaluations;
-        let note = format!(
-            "{}: degree {} on {}×{}: space-mapped start, objective {:.3e} -> {:.3e} ({} of {} proposals kept)",
-            map.dir.name(),
-            map.degree(&p),
-            level.0,
-            level.1,
-            m.before,
-            m.after,
-            m.kept,
-            m.shell_solves
-        );
+        let note = mapped_note(map, p, level, &m);
         // a trial screened at its mapped start: given up unless the shape error has not
         // risen or the rms error already fell by the degree gain there
         let screened_out = match screen {
-            Some((shape0, rms0)) => {
-                let r = problem(&p, false).map_err(fail)?.residuals;
-                let shape =
-                    super::shape_error(&lens, &super::surrogate::unweight(&r, &lens, prep.misfit));
-                let rms = (m.after / ncurves.max(1) as f64).sqrt();
-                let out = shape > shape0 && rms > self.opts.degree_gain * rms0;
-                if out {
-                    self.screened = Some((shape, rms));
+            Some(s) => {
+                let gain = self.opts.degree_gain;
+                let out = screen_trial(sp, &self.prep, p, m.after, s, gain).map_err(fail)?;
+                if out.is_some() {
+                    self.screened = out;
                 }
-                out
+                out.is_some()
             }
             None => false,
         };
-        if (raise && m.kept == 0) || screened_out {
-            self.stats.evaluations += evals;
-            self.stats.newton_iterations += newton;
-            self.stats.equilibria += solved;
-            self.stats.unstable_solves += unstable;
+        if (mode == StageMode::Raise && m.kept == 0) || screened_out {
+            self.add_counts(&sp.counts);
             self.log_degree(note);
-            for (key, rig) in rigs {
+            for (key, rig) in std::mem::take(&mut sp.rigs) {
                 self.keep_rig(key, rig);
             }
-            self.time_stage(map.dir.name(), t0);
-            return Ok(None);
+            return Ok(false);
         }
         if rounds > 0 {
             self.degree_log.push(note);
         }
-        let mut stiffness_rep = None;
-        if (first_level || stiffness_only) && !map.c_known {
-            // the homogeneous strip misjudges clamped strips' stiffness (most at 45°, where the
-            // jaws stop the strip from shearing freely): first fit the stiffness c alone
-            let rest = p[1..].to_vec();
-            let mut scale = vec![p[0]];
-            let one = OptimOptions {
-                method: Method::GaussNewton,
-                max_iterations: 10,
-                rel_decrease: 1e-2,
-                ..opts
-            };
-            let rep = minimize(&mut scale, &one, |q: &[f64], jac: bool| {
-                let mut full = vec![q[0]];
-                full.extend(&rest);
-                let e = problem(&full, jac)?;
-                Ok(Evaluation {
-                    residuals: e.residuals,
-                    jacobian: e.jacobian.map(|j| j.columns(0, 1).into_owned()),
-                })
-            })
-            .map_err(fail)?;
-            p[0] = scale[0];
-            if stiffness_only {
-                stiffness_rep = Some(rep);
-            }
+        Ok(true)
+    }
+
+    /// The stage's start from the current law, the tension–shear coupling moved back from a
+    /// saturated bound (and said so).
+    fn unsaturated_start(&mut self, map: StageMap) -> Vec<f64> {
+        let p = map.encode_start(&self.law);
+        if p != map.encode(&self.law) {
+            self.say(&format!(
+                "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
+                map.dir.name(),
+                100.0 * super::map::UNSATURATED
+            ));
         }
-        let mut rep = match stiffness_rep {
-            Some(rep) => rep,
-            None => minimize(&mut p, &opts, &mut problem).map_err(fail)?,
-        };
-        // a term too small to matter is dropped, and the optimum re-evaluated without it
-        let mut law = base.clone();
-        map.decode(&p, &mut law);
-        let mut eta = map.eta(&law).clone();
-        let dropped = super::plausible::drop_negligible(&mut eta, map.xhat);
-        if dropped > 0 {
-            *map.eta_mut(&mut law) = eta;
-            p = map.encode(&law);
-            let e = problem(&p, true).map_err(fail)?;
-            rep.objective = e.objective();
-        }
-        self.stats.evaluations += evals;
-        self.stats.newton_iterations += newton;
-        self.stats.equilibria += solved;
-        self.stats.unstable_solves += unstable;
-        map.decode(&p, &mut self.law);
-        let err = (rep.objective / ncurves.max(1) as f64).sqrt();
-        let shape = seen
+        p
+    }
+
+    /// Adds a stage's work to the fit's statistics.
+    fn add_counts(&mut self, c: &Counts) {
+        self.stats.evaluations += c.evals;
+        self.stats.newton_iterations += c.newton;
+        self.stats.equilibria += c.solved;
+        self.stats.unstable_solves += c.unstable;
+    }
+
+    /// At the stage's optimum p: records the standard errors and the linearisation from the
+    /// Jacobian computed there, and returns the shape error (`err`, the rms error, where p has
+    /// no evaluation).
+    fn stage_optimum(&mut self, sp: &StageProblem, p: &[f64], err: f64) -> f64 {
+        let (map, lens) = (sp.map, &sp.lens[..]);
+        let shape = sp
+            .seen
             .iter()
             .rev()
             .find(|(q, _, _)| *q == p)
             .map_or(err, |(_, r, _)| {
-                super::shape_error(
-                    &lens,
-                    &super::surrogate::unweight(r, &lens, self.prep.misfit),
-                )
+                super::shape_error(lens, &super::surrogate::unweight(r, lens, self.prep.misfit))
             });
         // standard errors at the optimum, from the Jacobian computed there
-        if let Some((r, j)) = super::uncertainty::at_optimum(&seen, &p) {
-            let errors = super::uncertainty::stage_errors(&map, &p, j, r, &lens, &self.law);
-            self.uncertainty.push((map.dir, p.clone(), errors));
+        if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
+            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.law);
+            self.uncertainty.push((map.dir, p.to_vec(), errors));
+            let tau = sp.tau;
             let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
-                super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, &p, strips)
+                super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, p, sp.strips)
             });
             self.linearised.push(super::mesh_check::Linearised::tensile(
-                &map, &p, &self.law, strips, level, j, &lens, offaxis,
+                &map, p, &self.law, sp.strips, sp.level, j, lens, offaxis,
             ));
         }
-        let angles: Vec<String> = strips
+        shape
+    }
+
+    /// The stage's progress line at its optimum p: rms and shape errors, work done.
+    fn stage_line(
+        &self,
+        sp: &StageProblem,
+        p: &[f64],
+        (err, shape): (f64, f64),
+        rep: &OptimReport,
+    ) -> String {
+        let (map, level) = (sp.map, sp.level);
+        format!(
+            "{} stage ({}, {} curves), degree {}, mesh {}×{}: rms relative error {:.3} % (shape error {:.3} %) after {} iterations, {} evaluations, {} Newton iterations ({})",
+            map.dir.name(),
+            self.strip_labels(sp.strips, level).join(" "),
+            sp.ncurves,
+            map.degree(p),
+            level.0,
+            level.1,
+            100.0 * err,
+            100.0 * shape,
+            rep.iterations,
+            rep.evaluations,
+            sp.counts.newton,
+            rep.stop
+        )
+    }
+
+    /// Each strip's angle, with its own mesh where it is refined beyond the level.
+    fn strip_labels(&self, strips: &[usize], level: (usize, usize)) -> Vec<String> {
+        strips
             .iter()
             .map(|&s| {
                 let strip = &self.prep.strips[s];
@@ -432,56 +420,32 @@ impl Fitter<'_> {
                     format!("{}° on its own {}x{}", strip.angle_deg, m.0, m.1)
                 }
             })
-            .collect();
-        let msg = format!(
-            "{} stage ({}, {ncurves} curves), degree {}, mesh {}×{}: rms relative error {:.3} % (shape error {:.3} %) after {} iterations, {} evaluations, {} Newton iterations ({})",
-            map.dir.name(),
-            angles.join(" "),
-            map.degree(&p),
-            level.0,
-            level.1,
-            100.0 * err,
-            100.0 * shape,
-            rep.iterations,
-            rep.evaluations,
-            newton,
-            rep.stop
-        );
-        self.say(&msg);
-        if dropped > 0 {
-            self.log_degree(format!(
-                "{}: {dropped} term(s) dropped on {}×{}: under {:.1} % of η' over the tested range",
-                map.dir.name(),
-                level.0,
-                level.1,
-                100.0 * super::plausible::NEGLIGIBLE
-            ));
-        }
+            .collect()
+    }
+
+    /// The strains the stage's strips exercise at the fitted law.
+    fn stage_strain_range(
+        &mut self,
+        map: StageMap,
+        rigs: &mut [(RigKey, StripRig)],
+    ) -> Result<Option<StrainRange>, FitError> {
         let mut range: Option<StrainRange> = None;
-        if strain_range {
-            // the strains the tests exercised, at the fitted parameters
-            let law = self.law.clone();
-            for (_, rig) in &mut rigs {
-                self.run_rig(rig, &law, false)
-                    .map_err(|source| FitError::Scene {
-                        stage: format!("{} strips at the fit", map.dir.name()),
-                        source,
-                    })?;
-                if let Some((lo, hi)) = rig.strain_range() {
-                    let r = range.get_or_insert((lo, hi));
-                    for i in 0..3 {
-                        r.0[i] = r.0[i].min(lo[i]);
-                        r.1[i] = r.1[i].max(hi[i]);
-                    }
+        let law = self.law.clone();
+        for (_, rig) in rigs {
+            self.run_rig(rig, &law, false)
+                .map_err(|source| FitError::Scene {
+                    stage: format!("{} strips at the fit", map.dir.name()),
+                    source,
+                })?;
+            if let Some((lo, hi)) = rig.strain_range() {
+                let r = range.get_or_insert((lo, hi));
+                for i in 0..3 {
+                    r.0[i] = r.0[i].min(lo[i]);
+                    r.1[i] = r.1[i].max(hi[i]);
                 }
             }
         }
-        for (key, rig) in rigs {
-            self.keep_rig(key, rig);
-        }
-        self.time_stage(map.dir.name(), t0);
-        self.stage_rms = err;
-        Ok(Some((shape, range)))
+        Ok(range)
     }
 
     /// Forces of every fitted curve on a mesh level at the current material (for the
@@ -576,4 +540,27 @@ pub(super) fn bootstrap_all(
     }
     f.time_stage("bootstrap", t0);
     shear_candidates
+}
+
+/// The log line of a stage's space-mapped start `m` at p.
+fn mapped_note(map: StageMap, p: &[f64], level: (usize, usize), m: &MappedStart) -> String {
+    format!(
+        "{}: degree {} on {}×{}: space-mapped start, objective {:.3e} -> {:.3e} ({} of {} proposals kept)",
+        map.dir.name(),
+        map.degree(p),
+        level.0,
+        level.1,
+        m.before,
+        m.after,
+        m.kept,
+        m.shell_solves
+    )
+}
+
+/// The error of a tensile stage whose solve failed.
+fn stage_failed(map: StageMap, level: (usize, usize)) -> impl Fn(SceneError) -> FitError + Copy {
+    move |source| FitError::Scene {
+        stage: format!("{} stage on {}×{}", map.dir.name(), level.0, level.1),
+        source,
+    }
 }

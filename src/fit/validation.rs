@@ -12,6 +12,7 @@
 //! strips.
 
 use super::map::A12Rule;
+use super::preprocess::Curve;
 use super::{FitError, Fitter, TestOutcome};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
@@ -169,103 +170,138 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     ));
     let coarse = f.predict_many(&jobs, half).ok();
     for c in 0..f.prep.curves.len() {
-        let curve = f.prep.curves[c].clone();
-        let data = f.data;
-        let t = &data.tensile[curve.test];
-        let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
-        // q = model/measured; the scale s with measured ≈ s·model minimises Σ(s q − 1)²:
-        // s = Σq/Σq²
-        let q: Vec<f64> = curve
+        tests.push(curve_outcome(f, c, last, coarse.as_deref(), order)?);
+    }
+    interpolation_note(f);
+    bend_outcomes(f, last, &mut tests)?;
+    Ok(tests)
+}
+
+/// The outcome of curve `c` on the last level; `coarse`: every strip's node forces on half
+/// the faces, for its mesh-error estimate at convergence order `order`.
+fn curve_outcome(
+    f: &mut Fitter,
+    c: usize,
+    last: (usize, usize),
+    coarse: Option<&[Vec<f64>]>,
+    order: f64,
+) -> Result<TestOutcome, FitError> {
+    let curve = f.prep.curves[c].clone();
+    let data = f.data;
+    let t = &data.tensile[curve.test];
+    let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
+    let (scale, scaled) = repeat_scale(f, &curve, &t.curve.display().to_string(), &model);
+    let strip = &f.prep.strips[curve.strip];
+    let mesh = super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
+    let mesh_error = coarse.map(|nodes| {
+        let rough = f.curve_forces(c, &nodes[curve.strip]);
+        super::refine::curve_mesh_error(&model, &rough, order)
+    });
+    if let Some(m) = mesh_error {
+        if m > super::refine::mesh_tolerance(err) {
+            f.notes.push(format!(
+                "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %, after {} of at most {} doublings of its own mesh: refine the ladder (--mesh-ladder)",
+                t.curve.display(),
+                curve.angle_deg,
+                100.0 * m,
+                mesh.0,
+                mesh.1,
+                100.0 * err,
+                strip.refine,
+                super::refine::MAX_DOUBLINGS
+            ));
+        }
+    }
+    let (misalign, aligned) = if curve.role == Role::Validation && f.opts.max_misalign_deg > 0.0 {
+        misalignment_check(f, c, &curve, &t.curve.display().to_string(), last)?
+    } else {
+        (None, None)
+    };
+    Ok(TestOutcome {
+        kind: match curve.role {
+            Role::Fit => "tensile",
+            Role::Validation => "validation",
+        },
+        angle_deg: curve.angle_deg,
+        curve: Some(t.curve.display().to_string()),
+        repeat: Some(curve.repeat),
+        avg_rel_error: Some(err),
+        drape_angle_deg: None,
+        target_drape_deg: None,
+        misalign_deg: misalign,
+        avg_rel_error_aligned: aligned,
+        repeat_scale: Some(scale),
+        avg_rel_error_scaled: Some(scaled),
+        toe: Some(curve.toe),
+        mesh: Some(mesh),
+        mesh_error_est: mesh_error,
+        points: curve
             .points
             .iter()
             .zip(&model)
-            .map(|(m, p)| p / m.1)
-            .filter(|q| q.is_finite())
-            .collect();
-        let excluded = model.len() - q.len();
-        if excluded > 0 {
-            f.notes.push(format!(
-                "warning: {} ({}°): {excluded} of {} points excluded from its errors: the model's equilibrium there is a saddle (the flat strip would wrinkle), whose force is not what the test measures",
-                t.curve.display(),
-                curve.angle_deg,
-                model.len()
-            ));
-        }
-        let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
-        let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
-        let strip = &f.prep.strips[curve.strip];
-        let mesh =
-            super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
-        let mesh_error = coarse.as_ref().map(|nodes| {
-            let rough = f.curve_forces(c, &nodes[curve.strip]);
-            super::refine::curve_mesh_error(&model, &rough, order)
-        });
-        if let Some(m) = mesh_error {
-            if m > super::refine::mesh_tolerance(err) {
-                f.notes.push(format!(
-                    "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %, after {} of at most {} doublings of its own mesh: refine the ladder (--mesh-ladder)",
-                    t.curve.display(),
-                    curve.angle_deg,
-                    100.0 * m,
-                    mesh.0,
-                    mesh.1,
-                    100.0 * err,
-                    strip.refine,
-                    super::refine::MAX_DOUBLINGS
-                ));
-            }
-        }
-        let (mut misalign, mut aligned) = (None, None);
-        if curve.role == Role::Validation && f.opts.max_misalign_deg > 0.0 {
-            f.say(&format!(
-                "report: misalignment diagnostic of {}",
-                t.curve.display()
-            ));
-            // a diagnostic: on the first level's strips, whatever this one's own mesh
-            f.ladder_meshes = true;
-            let found = f.misalignment(c, f.opts.ladder[0]);
-            f.ladder_meshes = false;
-            if let Some(d) = found {
-                let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
-                misalign = Some(d);
-                aligned = Some(e);
-                let m = f.opts.max_misalign_deg;
-                if (d.abs() - m).abs() < 1e-9 {
-                    f.notes.push(format!(
-                        "warning: validation {}° ({}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
-                        curve.angle_deg,
-                        t.curve.display()
-                    ));
-                }
-            }
-        }
-        tests.push(TestOutcome {
-            kind: match curve.role {
-                Role::Fit => "tensile",
-                Role::Validation => "validation",
-            },
-            angle_deg: curve.angle_deg,
-            curve: Some(t.curve.display().to_string()),
-            repeat: Some(curve.repeat),
-            avg_rel_error: Some(err),
-            drape_angle_deg: None,
-            target_drape_deg: None,
-            misalign_deg: misalign,
-            avg_rel_error_aligned: aligned,
-            repeat_scale: Some(scale),
-            avg_rel_error_scaled: Some(scaled),
-            toe: Some(curve.toe),
-            mesh: Some(mesh),
-            mesh_error_est: mesh_error,
-            points: curve
-                .points
-                .iter()
-                .zip(&model)
-                .map(|(m, q)| (m.0, m.1, *q))
-                .collect(),
-            used_in_fit: curve.used_in_fit,
-        });
+            .map(|(m, q)| (m.0, m.1, *q))
+            .collect(),
+        used_in_fit: curve.used_in_fit,
+    })
+}
+
+/// The scale s with measured ≈ s·model over the curve's points, and the mean error left
+/// after it; points where the model has no force (a saddle) are left out, with a note.
+fn repeat_scale(f: &mut Fitter, curve: &Curve, name: &str, model: &[f64]) -> (f64, f64) {
+    // q = model/measured; the scale s with measured ≈ s·model minimises Σ(s q − 1)²:
+    // s = Σq/Σq²
+    let q: Vec<f64> = curve
+        .points
+        .iter()
+        .zip(model)
+        .map(|(m, p)| p / m.1)
+        .filter(|q| q.is_finite())
+        .collect();
+    let excluded = model.len() - q.len();
+    if excluded > 0 {
+        f.notes.push(format!(
+            "warning: {name} ({}°): {excluded} of {} points excluded from its errors: the model's equilibrium there is a saddle (the flat strip would wrinkle), whose force is not what the test measures",
+            curve.angle_deg,
+            model.len()
+        ));
     }
+    let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
+    let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
+    (scale, scaled)
+}
+
+/// A validation curve's misalignment diagnostic: the cut angle's offset that fits it best
+/// and the error there, when found (noted when it sits on its bound).
+fn misalignment_check(
+    f: &mut Fitter,
+    c: usize,
+    curve: &Curve,
+    name: &str,
+    last: (usize, usize),
+) -> Result<(Option<f64>, Option<f64>), FitError> {
+    let (mut misalign, mut aligned) = (None, None);
+    f.say(&format!("report: misalignment diagnostic of {name}"));
+    // a diagnostic: on the first level's strips, whatever this one's own mesh
+    f.ladder_meshes = true;
+    let found = f.misalignment(c, f.opts.ladder[0]);
+    f.ladder_meshes = false;
+    if let Some(d) = found {
+        let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
+        misalign = Some(d);
+        aligned = Some(e);
+        let m = f.opts.max_misalign_deg;
+        if (d.abs() - m).abs() < 1e-9 {
+            f.notes.push(format!(
+                "warning: validation {}° ({name}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
+                curve.angle_deg,
+            ));
+        }
+    }
+    Ok((misalign, aligned))
+}
+
+/// The note on the model curves' interpolation between nodes (checked halfway between them).
+fn interpolation_note(f: &mut Fitter) {
     let exact = f.prep.strips.iter().filter(|s| s.at_points).count();
     if exact < f.prep.strips.len() {
         f.say("report: interpolation check (solves halfway between the nodes)");
@@ -298,6 +334,15 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         ),
         Err(e) => f.notes.push(format!("warning: the interpolation check could not be made: {e}")),
     }
+}
+
+/// The bend tests' outcomes, appended to `tests` (predicted on the last level first when the
+/// thickness is known and nothing fits them).
+fn bend_outcomes(
+    f: &mut Fitter,
+    last: (usize, usize),
+    tests: &mut Vec<TestOutcome>,
+) -> Result<(), FitError> {
     let data = f.data;
     if f.bend_angles.len() != data.bend.len() {
         // thickness known: the bends are predicted, not fitted
@@ -334,7 +379,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
             used_in_fit: fitted,
         });
     }
-    Ok(tests)
+    Ok(())
 }
 
 /// Which quantities the data determined and which were assumed, with their values.

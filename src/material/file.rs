@@ -229,19 +229,66 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
         line: e.span().map(|s| line_of(text, s.start)),
         message: e.message().trim().replace('\n', " "),
     })?;
-    let err = |table: Option<&str>, key: &str, message: String| MaterialFileError {
-        path: path.to_string(),
-        line: line_of_key(text, table, key),
-        message,
+    let e = Errs { text, path };
+    let a11 = e.check("a11_pa", raw.a11_pa, false)?;
+    let a22 = e.check("a22_pa", raw.a22_pa, false)?;
+    let g12 = e.check("g12_pa", raw.g12_pa, false)?;
+    let a12 = read_a12(&e, raw.a12_pa, a11, a22)?;
+    let cutoffs = match raw.cutoffs {
+        Some(c) => read_cutoffs(&e, c)?,
+        None => Cutoffs::none(),
     };
-    let check = |key: &str, v: f64, allow_zero: bool| -> Result<f64, MaterialFileError> {
+    check_moduli_range(&e, a11, a22, g12)?;
+    let stvk = OrthotropicStvk { a11, a22, a12, g12 };
+    let mut law: Orthotropic = stvk.into();
+    law.warp = read_eta(&e, "warp", raw.warp)?;
+    law.weft = read_eta(&e, "weft", raw.weft)?;
+    law.shear = read_eta(&e, "shear", raw.shear)?;
+    law.cutoffs = cutoffs;
+    if let Some(c) = raw.shear_coupling {
+        law.coupling = Some(read_coupling(&e, c)?);
+    }
+    check_rising(&e, &law)?;
+    let bending = match raw.bending {
+        None => None,
+        Some(b) => {
+            Some(bending(b, &law).map_err(|(key, message)| e.err(Some("bending"), key, message))?)
+        }
+    };
+    Ok(FabricMaterial {
+        bending,
+        name: raw.name,
+        areal_density: e.check("areal_density_g_m2", raw.areal_density_g_m2, false)? * 1e-3,
+        thickness: e.check("thickness_mm", raw.thickness_mm, false)? * 1e-3,
+        law,
+    })
+}
+
+/// Errors located in the material text `text` of the file `path`.
+struct Errs<'a> {
+    text: &'a str,
+    path: &'a str,
+}
+
+impl Errs<'_> {
+    /// An error at the line of `key` (within `[table]` when given).
+    fn err(&self, table: Option<&str>, key: &str, message: String) -> MaterialFileError {
+        MaterialFileError {
+            path: self.path.to_string(),
+            line: line_of_key(self.text, table, key),
+            message,
+        }
+    }
+
+    /// The top-level value `v` of `key`: finite and positive (or zero, with `allow_zero`).
+    fn check(&self, key: &str, v: f64, allow_zero: bool) -> Result<f64, MaterialFileError> {
         let ok = v.is_finite() && (v > 0.0 || (allow_zero && v == 0.0));
         if ok {
             Ok(v)
         } else {
             Err(MaterialFileError {
-                path: path.to_string(),
-                line: line_of_key(text, None, key),
+                path: self.path.to_string(),
+                line: line_of_key(self.text, None, key),
                 message: format!(
                     "{key} must be a finite {} number, got {v:?}",
                     if allow_zero {
@@ -252,15 +299,17 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
                 ),
             })
         }
-    };
-    let a11 = check("a11_pa", raw.a11_pa, false)?;
-    let a22 = check("a22_pa", raw.a22_pa, false)?;
-    let g12 = check("g12_pa", raw.g12_pa, false)?;
+    }
+}
+
+/// The coupling modulus `a12_pa` (default `0.5 · min(a11, a22)`), which keeps the membrane law
+/// definite.
+fn read_a12(e: &Errs, a12_pa: Option<f64>, a11: f64, a22: f64) -> Result<f64, MaterialFileError> {
     // a12 may be negative (a negative Poisson coupling); convexity is the only bound
-    let a12 = match raw.a12_pa {
+    let a12 = match a12_pa {
         Some(v) if v.is_finite() => v,
         Some(v) => {
-            return Err(err(
+            return Err(e.err(
                 None,
                 "a12_pa",
                 format!("a12_pa must be a finite number, got {v:?}"),
@@ -269,7 +318,7 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
         None => 0.5 * a11.min(a22),
     };
     if a12 * a12 >= a11 * a22 {
-        return Err(err(
+        return Err(e.err(
             None,
             "a12_pa",
             format!(
@@ -278,101 +327,111 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             ),
         ));
     }
-    let eta = |table: &str, raw: Option<RawEta>| -> Result<Eta, MaterialFileError> {
-        let Some(r) = raw else {
-            return Ok(Eta::linear());
-        };
-        if r.mu.is_empty() || r.mu.len() != r.alpha.len() {
-            return Err(err(
-                Some(table),
-                "alpha",
-                format!(
-                    "[{table}] needs mu and alpha of the same, non-zero length (got {} and {})",
-                    r.mu.len(),
-                    r.alpha.len()
-                ),
-            ));
-        }
-        for (key, values) in [("mu", &r.mu), ("alpha", &r.alpha)] {
-            if let Some(v) = values.iter().find(|v| !v.is_finite()) {
-                return Err(err(
-                    Some(table),
-                    key,
-                    format!("[{table}] {key} holds {v}: every entry must be finite"),
-                ));
-            }
-        }
-        if r.alpha.contains(&0.0) {
-            return Err(err(
-                Some(table),
-                "alpha",
-                format!("[{table}] alpha must not contain 0"),
-            ));
-        }
-        let sum: f64 = r.mu.iter().sum();
-        if (sum - 1.0).abs() > 1e-12 {
-            return Err(err(
-                Some(table),
-                "mu",
-                format!("[{table}] mu must sum to 1 (so that η'(0) = 1), got {sum:?}"),
-            ));
-        }
-        Ok(Eta {
-            mu: r.mu,
-            alpha: r.alpha,
-        })
+    Ok(a12)
+}
+
+/// The η of the table `[table]` (linear when absent): mu and alpha of one length, finite, no
+/// zero alpha, mu summing to 1.
+fn read_eta(e: &Errs, table: &str, raw: Option<RawEta>) -> Result<Eta, MaterialFileError> {
+    let Some(r) = raw else {
+        return Ok(Eta::linear());
     };
-    let mut cutoffs = Cutoffs::none();
-    if let Some(c) = raw.cutoffs {
-        let pick = |key: &str, v: Option<f64>, default: f64| -> Result<f64, MaterialFileError> {
-            match v {
-                None => Ok(default),
-                // ±inf: no cut-off on that side
-                Some(x) if !x.is_nan() => Ok(x),
-                Some(x) => Err(err(
-                    Some("cutoffs"),
-                    key,
-                    format!("[cutoffs] {key} must be a number, got {x:?}"),
-                )),
-            }
-        };
-        let (lo, hi) = (f64::NEG_INFINITY, f64::INFINITY);
-        let e11_max = pick("e11_max", c.e11_max, hi)?;
-        let e22_max = pick("e22_max", c.e22_max, hi)?;
-        let e12_max = pick("e12_max", c.e12_max, hi)?;
-        // tensile-only data: compression is extrapolated from zero strain unless told otherwise
-        let e11_min = pick(
-            "e11_min",
-            c.e11_min,
-            if c.e11_max.is_some() { 0.0 } else { lo },
-        )?;
-        let e22_min = pick(
-            "e22_min",
-            c.e22_min,
-            if c.e22_max.is_some() { 0.0 } else { lo },
-        )?;
-        for (key, min, max) in [
-            ("e11_max", e11_min, e11_max),
-            ("e22_max", e22_min, e22_max),
-            ("e12_max", -e12_max, e12_max),
-        ] {
-            if min >= max {
-                return Err(err(
-                    Some("cutoffs"),
-                    key,
-                    format!("[cutoffs] {key} = {max} leaves an empty range (min {min})"),
-                ));
-            }
-        }
-        cutoffs = Cutoffs {
-            e11: (e11_min, e11_max),
-            e22: (e22_min, e22_max),
-            e12: (-e12_max, e12_max),
-        };
+    if r.mu.is_empty() || r.mu.len() != r.alpha.len() {
+        return Err(e.err(
+            Some(table),
+            "alpha",
+            format!(
+                "[{table}] needs mu and alpha of the same, non-zero length (got {} and {})",
+                r.mu.len(),
+                r.alpha.len()
+            ),
+        ));
     }
+    for (key, values) in [("mu", &r.mu), ("alpha", &r.alpha)] {
+        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+            return Err(e.err(
+                Some(table),
+                key,
+                format!("[{table}] {key} holds {v}: every entry must be finite"),
+            ));
+        }
+    }
+    if r.alpha.contains(&0.0) {
+        return Err(e.err(
+            Some(table),
+            "alpha",
+            format!("[{table}] alpha must not contain 0"),
+        ));
+    }
+    let sum: f64 = r.mu.iter().sum();
+    if (sum - 1.0).abs() > 1e-12 {
+        return Err(e.err(
+            Some(table),
+            "mu",
+            format!("[{table}] mu must sum to 1 (so that η'(0) = 1), got {sum:?}"),
+        ));
+    }
+    Ok(Eta {
+        mu: r.mu,
+        alpha: r.alpha,
+    })
+}
+
+/// The `[cutoffs]` table: each side's bound (unbounded when absent; a given maximum sets the
+/// minimum to 0), each range non-empty.
+fn read_cutoffs(e: &Errs, c: RawCutoffs) -> Result<Cutoffs, MaterialFileError> {
+    let pick = |key: &str, v: Option<f64>, default: f64| -> Result<f64, MaterialFileError> {
+        match v {
+            None => Ok(default),
+            // ±inf: no cut-off on that side
+            Some(x) if !x.is_nan() => Ok(x),
+            Some(x) => Err(e.err(
+                Some("cutoffs"),
+                key,
+                format!("[cutoffs] {key} must be a number, got {x:?}"),
+            )),
+        }
+    };
+    let (lo, hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    let e11_max = pick("e11_max", c.e11_max, hi)?;
+    let e22_max = pick("e22_max", c.e22_max, hi)?;
+    let e12_max = pick("e12_max", c.e12_max, hi)?;
+    // tensile-only data: compression is extrapolated from zero strain unless told otherwise
+    let e11_min = pick(
+        "e11_min",
+        c.e11_min,
+        if c.e11_max.is_some() { 0.0 } else { lo },
+    )?;
+    let e22_min = pick(
+        "e22_min",
+        c.e22_min,
+        if c.e22_max.is_some() { 0.0 } else { lo },
+    )?;
+    for (key, min, max) in [
+        ("e11_max", e11_min, e11_max),
+        ("e22_max", e22_min, e22_max),
+        ("e12_max", -e12_max, e12_max),
+    ] {
+        if min >= max {
+            return Err(e.err(
+                Some("cutoffs"),
+                key,
+                format!("[cutoffs] {key} = {max} leaves an empty range (min {min})"),
+            ));
+        }
+    }
+    Ok(Cutoffs {
+        e11: (e11_min, e11_max),
+        e22: (e22_min, e22_max),
+        e12: (-e12_max, e12_max),
+    })
+}
+
+/// Refuses a stiffness outside [`MODULUS_RANGE`].
+fn check_moduli_range(e: &Errs, a11: f64, a22: f64, g12: f64) -> Result<(), MaterialFileError> {
     for (key, v) in [("a11_pa", a11), ("a22_pa", a22), ("g12_pa", g12)] {
         if !(MODULUS_RANGE.0..=MODULUS_RANGE.1).contains(&v) {
-            return Err(err(
+            return Err(e.err(
                 None,
                 key,
                 format!(
@@ -382,58 +441,47 @@ pub fn parse_material(text: &str, path: &str) -> Result<FabricMaterial, Material
             ));
         }
     }
-    let stvk = OrthotropicStvk { a11, a22, a12, g12 };
-    let mut law: Orthotropic = stvk.into();
-    law.warp = eta("warp", raw.warp)?;
-    law.weft = eta("weft", raw.weft)?;
-    law.shear = eta("shear", raw.shear)?;
-    law.cutoffs = cutoffs;
-    if let Some(c) = raw.shear_coupling {
-        for (key, v) in [("warp", c.warp), ("weft", c.weft)] {
-            if !(v.is_finite() && v.abs() <= COUPLING_MAX) {
-                return Err(err(
-                    Some("shear_coupling"),
-                    key,
-                    format!("[shear_coupling] {key} must be a finite number in [-{COUPLING_MAX}, {COUPLING_MAX}], got {v:?}"),
-                ));
-            }
+    Ok(())
+}
+
+/// The `[shear_coupling]` table, each exponent finite and within [`COUPLING_MAX`].
+fn read_coupling(e: &Errs, c: RawCoupling) -> Result<super::ShearCoupling, MaterialFileError> {
+    for (key, v) in [("warp", c.warp), ("weft", c.weft)] {
+        if !(v.is_finite() && v.abs() <= COUPLING_MAX) {
+            return Err(e.err(
+                Some("shear_coupling"),
+                key,
+                format!("[shear_coupling] {key} must be a finite number in [-{COUPLING_MAX}, {COUPLING_MAX}], got {v:?}"),
+            ));
         }
-        law.coupling = Some(super::ShearCoupling {
-            warp: c.warp,
-            weft: c.weft,
-        });
     }
-    // the stress must rise with strain wherever the law is its own (inside the cut-offs; Green
-    // strain up to 1 where there is none): a falling branch has no stable equilibrium
+    Ok(super::ShearCoupling {
+        warp: c.warp,
+        weft: c.weft,
+    })
+}
+
+/// Refuses a law whose stress stops rising with strain where the law is its own (inside the
+/// cut-offs; Green strain up to 1 where there is none): a falling branch has no stable
+/// equilibrium.
+fn check_rising(e: &Errs, law: &Orthotropic) -> Result<(), MaterialFileError> {
     for (table, key, eta, (lo, hi)) in [
         ("warp", "e11_max", &law.warp, law.cutoffs.e11),
         ("weft", "e22_max", &law.weft, law.cutoffs.e22),
         ("shear", "e12_max", &law.shear, law.cutoffs.e12),
     ] {
         let e_max = lo.abs().max(hi.abs()).min(1.0);
-        if let Some(e) = eta.stress_peak(e_max) {
-            return Err(err(
+        if let Some(strain) = eta.stress_peak(e_max) {
+            return Err(e.err(
                 Some(table),
                 "mu",
                 format!(
-                    "[{table}] the stress stops rising at Green strain {e:.4}, inside the law's valid range (up to {e_max}): lower [cutoffs] {key} below it or change mu and alpha"
+                    "[{table}] the stress stops rising at Green strain {strain:.4}, inside the law's valid range (up to {e_max}): lower [cutoffs] {key} below it or change mu and alpha"
                 ),
             ));
         }
     }
-    let bending = match raw.bending {
-        None => None,
-        Some(b) => {
-            Some(bending(b, &law).map_err(|(key, message)| err(Some("bending"), key, message))?)
-        }
-    };
-    Ok(FabricMaterial {
-        bending,
-        name: raw.name,
-        areal_density: check("areal_density_g_m2", raw.areal_density_g_m2, false)? * 1e-3,
-        thickness: check("thickness_mm", raw.thickness_mm, false)? * 1e-3,
-        law,
-    })
+    Ok(())
 }
 
 /// The rigidities of a `[bending]` table, or the key at fault and why.
@@ -525,172 +573,4 @@ pub fn material_toml(m: &FabricMaterial) -> String {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    const GOOD: &str = "name = \"example\"\nareal_density_g_m2 = 103.6\nthickness_mm = 0.18\na11_pa = 2.0e7\na22_pa = 1.5e7\ng12_pa = 1.0e6\n";
-
-    #[test]
-    fn bending_tables_are_read_and_checked() {
-        let with = |table: &str| format!("{GOOD}\n[bending]\n{table}");
-        let m = parse_material(
-            &with("warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 3e-6\n"),
-            "m",
-        )
-        .unwrap();
-        let b = m.bending.unwrap();
-        assert!((b.at_angle(45.0) / 3e-6 - 1.0).abs() < 1e-12);
-        // no bias: the twist follows the membrane law (soft in shear here: softer than the mean)
-        let b = parse_material(&with("warp_n_m = 2e-5\nweft_n_m = 6e-6\n"), "m")
-            .unwrap()
-            .bending
-            .unwrap();
-        assert!(b.at_angle(45.0) < 0.5 * (2e-5 + 6e-6));
-        for (table, key) in [
-            ("warp_n_m = -2e-5\nweft_n_m = 6e-6\n", "warp_n_m"),
-            (
-                "warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 1e-4\n",
-                "bias_n_m",
-            ),
-            (
-                "warp_n_m = 2e-5\nweft_n_m = 6e-6\nbias_n_m = 1e-6\ntwist_n_m = 1e-6\n",
-                "twist_n_m",
-            ),
-        ] {
-            let e = parse_material(&with(table), "m").unwrap_err();
-            assert!(e.message.contains(key), "{e}");
-            assert!(e.line.is_some(), "{e}");
-        }
-        assert!(parse_material(&with("warp_n_m = 2e-5\n"), "m").is_err());
-    }
-
-    #[test]
-    fn written_materials_read_back_exactly() {
-        let mut m = parse_material(GOOD, "m.toml").unwrap();
-        m.law.warp = Eta {
-            mu: vec![0.3, 0.7],
-            alpha: vec![1.0 / 3.0, 171.5],
-        };
-        m.law.cutoffs.e11 = (f64::NEG_INFINITY, 0.0625);
-        m.law.cutoffs.e12 = (-0.1, 0.1);
-        m.bending = Some(BendingRigidity::from_bias(2e-5, 6e-6, 3e-6).unwrap());
-        m.law.coupling = Some(crate::material::ShearCoupling {
-            warp: -8.25,
-            weft: 1.0 / 3.0,
-        });
-        let text = material_toml(&m);
-        let back = parse_material(&text, "w.toml").unwrap();
-        assert_eq!(back, m, "{text}");
-        // with a [fit] table as ks-fit fit writes it
-        let with_fit =
-            format!("{text}\n[fit]\nwall_seconds = 3.5\n[[fit.test]]\nkind = \"bend\"\n");
-        assert_eq!(parse_material(&with_fit, "w.toml").unwrap(), m);
-    }
-
-    #[test]
-    fn a_shear_coupling_is_read_and_checked() {
-        let m = parse_material(
-            &format!("{GOOD}[shear_coupling]\nwarp = -8.0\nweft = 3.5\n"),
-            "m",
-        )
-        .unwrap();
-        let c = m.law.coupling.unwrap();
-        assert_eq!((c.warp, c.weft), (-8.0, 3.5));
-        assert_eq!(parse_material(GOOD, "m").unwrap().law.coupling, None);
-        for (table, key) in [
-            ("warp = -8.0\nweft = 300.0\n", "weft"),
-            ("warp = nan\nweft = 0.0\n", "warp"),
-        ] {
-            let e = parse_material(&format!("{GOOD}[shear_coupling]\n{table}"), "m").unwrap_err();
-            assert!(e.message.contains(key) && e.line.is_some(), "{e}");
-        }
-        assert!(parse_material(&format!("{GOOD}[shear_coupling]\nwarp = 1.0\n"), "m").is_err());
-    }
-
-    #[test]
-    fn reads_and_converts_to_si_with_the_default_a12() {
-        let m = parse_material(GOOD, "m.toml").unwrap();
-        assert!((m.areal_density - 0.1036).abs() < 1e-15);
-        assert!((m.thickness - 1.8e-4).abs() < 1e-18);
-        assert_eq!(m.law.a12, 0.75e7);
-        assert_eq!(m.law.warp, Eta::linear());
-        assert_eq!(m.law.cutoffs, Cutoffs::none());
-    }
-
-    #[test]
-    fn reads_the_nonlinear_tables_and_cutoffs() {
-        let text = format!(
-            "{GOOD}[warp]\nmu = [0.7, 0.3]\nalpha = [1.0, 12.0]\n[shear]\nmu = [1.5, -0.5]\nalpha = [2.0, -3.0]\n[cutoffs]\ne11_max = 0.12\ne12_max = 0.2\n"
-        );
-        let m = parse_material(&text, "m.toml").unwrap();
-        assert_eq!(m.law.warp.alpha, vec![1.0, 12.0]);
-        assert_eq!(m.law.weft, Eta::linear());
-        assert_eq!(m.law.shear.mu, vec![1.5, -0.5]);
-        assert_eq!(m.law.cutoffs.e11, (0.0, 0.12));
-        assert_eq!(m.law.cutoffs.e12, (-0.2, 0.2));
-        assert_eq!(m.law.cutoffs.e22.1, f64::INFINITY);
-    }
-
-    #[test]
-    fn errors_name_file_line_and_key() {
-        let cases = [
-            (
-                format!("{GOOD}colour = 3\n"),
-                "m.toml:7: unknown field `colour`",
-            ),
-            (
-                GOOD.replace("g12_pa = 1.0e6\n", ""),
-                "m.toml:1: missing field `g12_pa`",
-            ),
-            (
-                GOOD.replace("a22_pa = 1.5e7", "a22_pa = -1.5e7"),
-                "m.toml:5: a22_pa must be a finite positive",
-            ),
-            (
-                GOOD.replace("thickness_mm = 0.18", "thickness_mm = 0"),
-                "m.toml:3: thickness_mm must be",
-            ),
-            (
-                GOOD.replace("a11_pa = 2.0e7", "a11_pa = nan"),
-                "m.toml:4: a11_pa must be",
-            ),
-            (
-                format!("{GOOD}a12_pa = 3e7\n"),
-                "m.toml:7: a12_pa = 30000000 makes the membrane law indefinite",
-            ),
-            (
-                GOOD.replace("a11_pa = 2.0e7", "a11_pa = \"big\""),
-                "m.toml:4: invalid type",
-            ),
-            (
-                format!("{GOOD}[warp]\nmu = [0.7, 0.2]\nalpha = [1.0, 12.0]\n"),
-                "m.toml:8: [warp] mu must sum to 1",
-            ),
-            (
-                format!("{GOOD}[weft]\nmu = [1.0]\nalpha = [4.0, 2.0]\n"),
-                "m.toml:9: [weft] needs mu and alpha of the same",
-            ),
-            (
-                format!("{GOOD}[shear]\nmu = [1.0]\nalpha = [0.0]\n"),
-                "m.toml:9: [shear] alpha must not contain 0",
-            ),
-            (
-                format!("{GOOD}[shear]\nmu = [1.0]\nalpha = [nan]\n"),
-                "m.toml:9: [shear] alpha holds NaN",
-            ),
-            (
-                format!("{GOOD}[cutoffs]\ne11_max = -0.1\n"),
-                "m.toml:8: [cutoffs] e11_max = -0.1 leaves an empty range",
-            ),
-            (
-                format!("{GOOD}[cutoffs]\ne13_max = 0.1\n"),
-                "m.toml:8: unknown field `e13_max`",
-            ),
-        ];
-        for (text, want) in cases {
-            let got = parse_material(&text, "m.toml").unwrap_err().to_string();
-            assert!(got.starts_with(want), "{got:?} should start with {want:?}");
-            assert!(!got.contains('\n'));
-        }
-    }
-}
+mod tests;

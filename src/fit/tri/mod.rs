@@ -28,12 +28,13 @@ use std::time::Instant;
 
 mod minimise;
 mod shapes;
+mod stages;
 pub mod verdict;
 
 pub use minimise::SPLINE_FLOOR;
-use minimise::{cost, levenberg_marquardt, stage};
 use shapes::shape_stage;
 pub use shapes::SHAPE_TRUST;
+use stages::{StageSets, TriRun};
 
 /// Fit settings.
 #[derive(Clone, Debug)]
@@ -174,6 +175,74 @@ pub fn fit_tri(
         "no toe (slack, preload) compensation and every repeat fitted alike in triangle-model fits"
             .to_string(),
     ];
+    let targets = tri_targets(data, opts)?;
+    let start = starting_moduli(data, density)?;
+    let cell = data.bend.first().map_or(0.003, |b| {
+        b.width / (TriCantilever::new(b.width, b.overhang, 0.0).mesh.0 * opts.bend_refine) as f64
+    });
+    let mut material = TriMaterial::from_zero_strain(
+        opts.kind,
+        &start.moduli,
+        density,
+        cell,
+        crate::tri::file::SPRING_CURVATURE,
+    );
+    material.coupling = 0.0;
+    let mut undetermined = start.undetermined.clone();
+    if opts.kind == TriKind::Springs {
+        undetermined.push("shear");
+        notes.push("the springs model is simulated on yarn-aligned strips only: off-axis strips were not fitted, its shear is the start value".into());
+    }
+    if opts.kind == TriKind::Xpbd {
+        undetermined.push("coupling");
+        notes.push(
+            "xpbd: the Poisson coupling C01 is held at 0 (strip forces hardly depend on it)".into(),
+        );
+    }
+    let sets = StageSets::new(&targets, opts.kind);
+    let stages = sets.stages(opts.kind);
+    let mut run = TriRun {
+        targets: &targets,
+        opts,
+        evaluations: 0,
+    };
+    for &st in &stages {
+        run.run_stage(&mut material, st, st.1 < 3, progress);
+    }
+    let whole = run.repeat_passes(&mut material, &stages, &sets.lab, &mut notes, progress);
+    // warp and weft bending together: the diagonal hinges tie them
+    if !sets.bend_warp.is_empty() && !sets.bend_weft.is_empty() {
+        run.bending_together(&mut material, &sets, whole, &mut notes, progress);
+    }
+    let mut evaluations = run.evaluations;
+    // last: a buckled sheet's shape jumps to another branch of wrinkles when a stiffness moves
+    // by a few percent, so nothing may move after it
+    let shapes_fitted = shape_stage(
+        &mut material,
+        &targets,
+        &mut undetermined,
+        &mut notes,
+        &mut evaluations,
+        progress,
+    );
+    if opts.kind != TriKind::Springs {
+        undetermined.push("bend_diag");
+        notes.push("bend_diag is the geometric mean of bend_warp and bend_weft: warp and weft cantilevers do not determine it".into());
+    }
+    let tests = report(&targets, &material, shapes_fitted);
+    Ok(TriFit {
+        material,
+        tests,
+        undetermined,
+        notes,
+        evaluations,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The fit's targets: the tensile curves (thinned to `opts.points`; the springs model's on
+/// yarn-aligned strips only), the cantilevers and the captured shapes.
+fn tri_targets(data: &FabricDataset, opts: &TriFitOptions) -> Result<Vec<Target>, String> {
     let mut targets = Vec::new();
     for t in &data.tensile {
         if opts.kind == TriKind::Springs && !(near(t.angle_deg, 0.0) || near(t.angle_deg, 90.0)) {
@@ -210,194 +279,7 @@ pub fn fit_tri(
     for sh in &data.shapes {
         targets.push(Target::Shape(Box::new(ShapeTarget::new(sh, opts.points)?)));
     }
-    let start = starting_moduli(data, density)?;
-    let cell = data.bend.first().map_or(0.003, |b| {
-        b.width / (TriCantilever::new(b.width, b.overhang, 0.0).mesh.0 * opts.bend_refine) as f64
-    });
-    let mut material = TriMaterial::from_zero_strain(
-        opts.kind,
-        &start.moduli,
-        density,
-        cell,
-        crate::tri::file::SPRING_CURVATURE,
-    );
-    material.coupling = 0.0;
-    let mut undetermined = start.undetermined.clone();
-    if opts.kind == TriKind::Springs {
-        undetermined.push("shear");
-        notes.push("the springs model is simulated on yarn-aligned strips only: off-axis strips were not fitted, its shear is the start value".into());
-    }
-    if opts.kind == TriKind::Xpbd {
-        undetermined.push("coupling");
-        notes.push(
-            "xpbd: the Poisson coupling C01 is held at 0 (strip forces hardly depend on it)".into(),
-        );
-    }
-    let mut evaluations = 0;
-    let select = |pred: &dyn Fn(&Target) -> bool| -> Vec<usize> {
-        (0..targets.len()).filter(|&i| pred(&targets[i])).collect()
-    };
-    let is_strip_at =
-        |a: f64| move |t: &Target| matches!(t, Target::Strip { .. }) && near(t.angle_deg(), a);
-    let warp = select(&is_strip_at(90.0));
-    let weft = select(&is_strip_at(0.0));
-    let off: Vec<usize> = select(&|t: &Target| {
-        matches!(t, Target::Strip { fitted: true, .. })
-            && !near(t.angle_deg(), 0.0)
-            && !near(t.angle_deg(), 90.0)
-    });
-    let bend_warp =
-        select(&|t: &Target| matches!(t, Target::Bend { .. }) && near(t.angle_deg(), 90.0));
-    let bend_weft =
-        select(&|t: &Target| matches!(t, Target::Bend { .. }) && near(t.angle_deg(), 0.0));
-    // the springs' ring-2 bending springs also carry stretch: their bending stages see the
-    // strips along the same yarn too, or a cantilever's bending springs stiffen until the strip
-    // is several times too stiff (on a shell's cotton, 600 % on the weft)
-    let with = |a: &Vec<usize>, b: &Vec<usize>| -> Vec<usize> {
-        if opts.kind == TriKind::Springs && !a.is_empty() {
-            a.iter().chain(b).copied().collect()
-        } else {
-            a.clone()
-        }
-    };
-    let (bend_warp_set, bend_weft_set) = (with(&bend_warp, &warp), with(&bend_weft, &weft));
-    let mut stages: Vec<(&str, usize, &Vec<usize>)> = vec![
-        ("warp stretch", 0, &warp),
-        ("weft stretch", 1, &weft),
-        ("shear", 2, &off),
-        ("warp bending", 3, &bend_warp_set),
-        ("weft bending", 4, &bend_weft_set),
-    ];
-    if opts.kind == TriKind::Springs {
-        stages.retain(|s| s.1 != 2);
-    }
-    let run = |material: &mut TriMaterial,
-               name: &str,
-               c: usize,
-               set: &[usize],
-               splines: bool,
-               evaluations: &mut usize,
-               progress: &mut dyn FnMut(&str)| {
-        if set.is_empty() {
-            return;
-        }
-        let cost = stage(material, c, set, &targets, evaluations, opts, splines);
-        progress(&format!(
-            "{name}: {} control value(s), rms error {:.2} % over {} test(s)",
-            material.curves[c].k.len(),
-            100.0 * cost,
-            set.len()
-        ));
-    };
-    for &(name, c, set) in &stages {
-        run(
-            &mut material,
-            name,
-            c,
-            set,
-            c < 3,
-            &mut evaluations,
-            progress,
-        );
-        if c == 4 && opts.kind != TriKind::Springs {
-            tie_diagonal(&mut material);
-        }
-    }
-    // one more pass over shear and bending (Miguel et al.); the springs' ring-2 bending
-    // springs also carry stretch, so for them the stretch stages are repeated too, until no
-    // value moves by 0.1 % (at most three more passes). A pass that leaves the fitted lab
-    // tests worse off as a whole is undone: each stage only sees its own tests, and on a
-    // shell's cotton the springs' bending stage can stiffen the ring-2 springs until the
-    // strips are 330–630 % off and a cantilever no longer solves.
-    let lab: Vec<usize> = select(&|t: &Target| match t {
-        Target::Strip { fitted, .. } => *fitted,
-        Target::Bend { .. } => true,
-        Target::Shape(_) => false,
-    });
-    let cost_of =
-        |m: &TriMaterial, set: &[usize], t: &[Target], e: &mut usize| cost(m, set, t, e).0;
-    let mut whole = cost_of(&material, &lab, &targets, &mut evaluations);
-    let again: Vec<_> = if opts.kind == TriKind::Springs {
-        stages.clone()
-    } else {
-        stages.iter().filter(|s| s.1 >= 2).cloned().collect()
-    };
-    for _ in 0..if opts.kind == TriKind::Springs { 3 } else { 1 } {
-        let before = material.clone();
-        for &(name, c, set) in &again {
-            run(
-                &mut material,
-                name,
-                c,
-                set,
-                false,
-                &mut evaluations,
-                progress,
-            );
-            if c == 4 && opts.kind != TriKind::Springs {
-                tie_diagonal(&mut material);
-            }
-        }
-        let now = cost_of(&material, &lab, &targets, &mut evaluations);
-        if now.is_nan() || now >= whole {
-            progress(&format!(
-                "the pass left the lab tests worse off (rms {:.2} % against {:.2} %): undone",
-                100.0 * now,
-                100.0 * whole
-            ));
-            notes.push(format!("a repeated pass over the stages was undone: it left the fitted lab tests worse off as a whole (rms {:.2} % against {:.2} %)", 100.0 * now, 100.0 * whole));
-            material = before;
-            break;
-        }
-        whole = now;
-        let moved = (0..6).any(|c| {
-            let (a, b) = (&before.curves[c].k, &material.curves[c].k);
-            a.iter().zip(b).any(|(x, y)| (x - y).abs() > 1e-3 * x.abs())
-        });
-        if !moved {
-            break;
-        }
-    }
-    // warp and weft bending together: the diagonal hinges tie them
-    if !bend_warp.is_empty() && !bend_weft.is_empty() {
-        let both: Vec<usize> = bend_warp.iter().chain(&bend_weft).copied().collect();
-        let before = material.clone();
-        let cost = levenberg_marquardt(&mut material, &[3, 4], &both, &targets, &mut evaluations);
-        progress(&format!(
-            "warp and weft bending together: rms error {:.2} % over {} test(s)",
-            100.0 * cost,
-            both.len()
-        ));
-        // the springs' bending also stretches: kept only if the lab tests gain as a whole
-        let now = cost_of(&material, &lab, &targets, &mut evaluations);
-        if now.is_nan() || now >= whole {
-            notes.push(format!("fitting warp and weft bending together was undone: it left the fitted lab tests worse off as a whole (rms {:.2} % against {:.2} %)", 100.0 * now, 100.0 * whole));
-            material = before;
-        }
-    }
-    // last: a buckled sheet's shape jumps to another branch of wrinkles when a stiffness moves
-    // by a few percent, so nothing may move after it
-    let shapes_fitted = shape_stage(
-        &mut material,
-        &targets,
-        &mut undetermined,
-        &mut notes,
-        &mut evaluations,
-        progress,
-    );
-    if opts.kind != TriKind::Springs {
-        undetermined.push("bend_diag");
-        notes.push("bend_diag is the geometric mean of bend_warp and bend_weft: warp and weft cantilevers do not determine it".into());
-    }
-    let tests = report(&targets, &material, shapes_fitted);
-    Ok(TriFit {
-        material,
-        tests,
-        undetermined,
-        notes,
-        evaluations,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    Ok(targets)
 }
 
 pub(super) fn tie_diagonal(m: &mut TriMaterial) {
