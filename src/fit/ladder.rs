@@ -86,10 +86,11 @@ fn skipped_by_estimate(
     let estimate = m.next_level(f.mesh_order());
     if estimate.passes() {
         let note = format!(
-            "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below 1 % and 0.3 %)",
+            "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below {})",
             level.0, level.1, from.0, from.1, m.parameter,
             100.0 * estimate.change, 100.0 * estimate.curve_change,
-            100.0 * m.change, 100.0 * m.curve_change, f.mesh_order()
+            100.0 * m.change, 100.0 * m.curve_change, f.mesh_order(),
+            super::mesh_check::rules_in_words()
         );
         f.say(&note);
         f.notes.push(note);
@@ -139,10 +140,11 @@ fn refinement_check(
     let skip = match &check {
         Some(m) => m.passes().then(|| {
             format!(
-                "meshes from {}×{} on skipped: refitting the {}×{} fit on {}×{} would change {} by only {:.2} % and its curves by {:.2} % (first-order refit; below 1 % and 0.3 %)",
+                "meshes from {}×{} on skipped: refitting the {}×{} fit on {}×{} would change {} by only {:.2} % and its curves by {:.2} % (first-order refit; below {})",
                 level.0, level.1, from.0, from.1, level.0, level.1,
                 if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
-                100.0 * m.change, 100.0 * m.curve_change
+                100.0 * m.change, 100.0 * m.curve_change,
+                super::mesh_check::rules_in_words()
             )
         }),
         None => (change < opts.skip_tol).then(|| {

@@ -37,6 +37,15 @@ pub const MESH_CURVE_TOL: f64 = 3e-3;
 /// ... and no drape angle by this many degrees or more: 0.1°.
 pub const MESH_ANGLE_TOL_DEG: f64 = 0.1;
 
+/// The parameter and curve rules in words, as the notes print them ("1 % and 0.3 %").
+pub(super) fn rules_in_words() -> String {
+    format!(
+        "{:.0} % and {:.1} %",
+        100.0 * MESH_PARAM_TOL,
+        100.0 * MESH_CURVE_TOL
+    )
+}
+
 /// Where the check solves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum MeshCheckMode {

@@ -25,3 +25,7 @@ pub(super) const POLISH_XTOL: f64 = 1e-3;
 
 /// Strips cut within this many degrees of each other share warm starts.
 pub(super) const NEAR_ANGLE_DEG: f64 = 1.5;
+
+/// Largest relative error of the interpolated model curve against solves between its nodes
+/// before the interpolation check warns (0.1 %, a third of the mesh check's curve rule).
+pub(super) const INTERPOLATION_TOL: f64 = 1e-3;

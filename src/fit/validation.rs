@@ -13,6 +13,7 @@
 
 use super::map::A12Rule;
 use super::preprocess::Curve;
+use super::tolerances::INTERPOLATION_TOL;
 use super::{FitError, Fitter, TestOutcome};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
@@ -327,7 +328,7 @@ fn interpolation_note(f: &mut Fitter) {
         } else {
             ""
         },
-        if worst.0 > 1e-3 { "; warning: above 0.1 %, raise the node count" } else { "" }
+        if worst.0 > INTERPOLATION_TOL { "; warning: above 0.1 %, raise the node count" } else { "" }
     )),
         Ok(None) => f.notes.push(
             "model curves solved at every measured elongation (no strip has more of them than nodes): nothing interpolated, no interpolation error".to_string(),
