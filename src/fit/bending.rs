@@ -149,7 +149,7 @@ impl Fitter<'_> {
             rep.evaluations,
             rep.stop
         );
-        self.say(&msg);
+        self.journal.say(&msg);
         self.time_stage("bending", t0);
         Ok(())
     }
@@ -168,25 +168,29 @@ impl Fitter<'_> {
         let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
         let values = [b.warp, b.weft, b.twist];
         if let Some((_, j)) = super::uncertainty::at_optimum(seen, p) {
-            self.linearised.push(super::mesh_check::Linearised::bends(
-                level,
-                j,
-                &names[..n],
-                &values[..n],
-            ));
+            self.evidence
+                .linearised
+                .push(super::mesh_check::Linearised::bends(
+                    level,
+                    j,
+                    &names[..n],
+                    &values[..n],
+                ));
         }
-        self.stage_errors = match super::uncertainty::at_optimum(seen, p) {
+        self.evidence.stage_errors = match super::uncertainty::at_optimum(seen, p) {
             Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
             None => Vec::new(),
         };
         if !off_axis {
-            self.stage_errors.push(super::uncertainty::ParamError {
-                name: names[2].into(),
-                value: b.twist,
-                std_error: None,
-                basis: "assumed",
-                determined: false,
-            });
+            self.evidence
+                .stage_errors
+                .push(super::uncertainty::ParamError {
+                    name: names[2].into(),
+                    value: b.twist,
+                    std_error: None,
+                    basis: "assumed",
+                    determined: false,
+                });
         }
     }
 }

@@ -161,7 +161,7 @@ impl Fitter<'_> {
         }
         if mode == CouplingMode::Auto && angles < 2 {
             self.coupling = CouplingOutcome::NotTried;
-            self.degree_log.push(format!(
+            self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
             return Ok((map, err, range));
@@ -172,14 +172,15 @@ impl Fitter<'_> {
         };
         let saved = (
             self.law.clone(),
-            self.uncertainty.len(),
-            self.linearised.len(),
+            self.evidence.uncertainty.len(),
+            self.evidence.linearised.len(),
         );
         self.law.coupling = Some(ShearCoupling {
             warp: 0.0,
             weft: 0.0,
         });
-        self.say("bias: refitting with the tension–shear coupling free");
+        self.journal
+            .say("bias: refitting with the tension–shear coupling free");
         let without = StageErrors {
             shape: err,
             rms: self.stage_rms,
@@ -250,8 +251,8 @@ impl Fitter<'_> {
                     ));
                 }
                 self.law = saved.0;
-                self.uncertainty.truncate(saved.1);
-                self.linearised.truncate(saved.2);
+                self.evidence.uncertainty.truncate(saved.1);
+                self.evidence.linearised.truncate(saved.2);
                 self.coupling = rejected;
                 Ok((map, err, range))
             }

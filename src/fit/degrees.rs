@@ -82,7 +82,7 @@ impl Fitter<'_> {
                 },
             };
             self.law = trial.1.clone();
-            self.degree_log.push(format!(
+            self.journal.degree(format!(
                 "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
                 map.dir.name(),
                 100.0 * trial.0,
@@ -116,7 +116,7 @@ impl Fitter<'_> {
             let good = trial.0 <= self.opts.degree_good;
             best = Some(trial);
             if self.opts.fixed_degree.is_none() && good {
-                self.degree_log.push(format!(
+                self.journal.degree(format!(
                     "{}: degree {degree} kept: error below {:.2} %",
                     map.dir.name(),
                     100.0 * self.opts.degree_good
@@ -143,7 +143,10 @@ impl Fitter<'_> {
     ) -> Result<Option<Trial>, FitError> {
         let from = map.encode(&prev.1);
         let fixed = self.opts.fixed_degree.is_some();
-        let marks = (self.uncertainty.len(), self.linearised.len());
+        let marks = (
+            self.evidence.uncertainty.len(),
+            self.evidence.linearised.len(),
+        );
         let beta = super::plausible::new_term_beta(map, &from, cand);
         let mode = if fixed {
             StageMode::RaiseAlways
@@ -158,16 +161,19 @@ impl Fitter<'_> {
             Ok(t) => t,
             // the mapped start's failure is not the raise's: the stiff start may still solve
             Err(e) => {
-                self.say(&format!(
+                self.journal.say(&format!(
                     "{}: the mapped start failed ({e})",
                     map.dir.name()
                 ));
                 None
             }
         };
-        let between = (self.uncertainty.len(), self.linearised.len());
+        let between = (
+            self.evidence.uncertainty.len(),
+            self.evidence.linearised.len(),
+        );
         let stiff = stiff_beta(map, &from);
-        self.say(&format!(
+        self.journal.say(&format!(
             "{}: degree {} again from a stiff new term (β = {stiff:.2}), by the shell's own iterations",
             map.dir.name(),
             map.degree(&from) + 1
@@ -183,7 +189,8 @@ impl Fitter<'_> {
         let direct = match (direct, &mapped) {
             (Ok(t), _) => t,
             (Err(e), Some(_)) => {
-                self.say(&format!("{}: the stiff start failed ({e})", map.dir.name()));
+                self.journal
+                    .say(&format!("{}: the stiff start failed ({e})", map.dir.name()));
                 None
             }
             (Err(e), None) => return Err(e),
@@ -191,13 +198,13 @@ impl Fitter<'_> {
         Ok(match (mapped, direct) {
             (Some(m), Some(d)) if d.0 < m.0 => {
                 // the mapped trial's records give way to the direct one's
-                self.uncertainty.drain(marks.0..between.0);
-                self.linearised.drain(marks.1..between.1);
+                self.evidence.uncertainty.drain(marks.0..between.0);
+                self.evidence.linearised.drain(marks.1..between.1);
                 Some(d)
             }
             (Some(m), _) => {
-                self.uncertainty.truncate(between.0);
-                self.linearised.truncate(between.1);
+                self.evidence.uncertainty.truncate(between.0);
+                self.evidence.linearised.truncate(between.1);
                 self.stage_rms = m.3;
                 Some(m)
             }

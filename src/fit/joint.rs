@@ -70,8 +70,8 @@ pub(super) fn without_sweep_if_coupled(f: &mut Fitter, sets: &mut StageSets) {
     if kept && sets.joint.is_some() && f.opts.joint == Joint::Auto {
         sets.joint = None;
         let note = "joint sweep not run (--joint auto): the tension–shear coupling was kept, and its shear stage fits the yarn and shear terms together (--joint on forces the sweep)".to_string();
-        f.say(&note);
-        f.notes.push(note);
+        f.journal.say(&note);
+        f.journal.note(note);
     }
 }
 
@@ -92,7 +92,7 @@ impl Fitter<'_> {
         if strips.is_empty() {
             return Ok(());
         }
-        self.say(&format!(
+        self.journal.say(&format!(
             "{} stiffness again over every strip it moves (the joint sweep)",
             map.dir.name()
         ));

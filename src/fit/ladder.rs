@@ -42,9 +42,9 @@ pub(super) fn ladder(
         if let Some(prev) = &previous {
             let (skip, check) = refinement_check(f, prev, &all, from, level)?;
             if let Some(note) = skip {
-                f.say(&note);
-                f.notes.push(note);
-                f.ladder_check = check;
+                f.journal.say(&note);
+                f.journal.note(note);
+                f.evidence.ladder_check = check;
                 break;
             }
             last_check = check;
@@ -58,7 +58,8 @@ pub(super) fn ladder(
             f.joint_stiffness(maps[0], 0, sets, level)?;
             f.joint_stiffness(maps[1], 1, sets, level)?;
             if !strips[2].is_empty() {
-                f.say("bias stage again, given the joint yarn stiffnesses");
+                f.journal
+                    .say("bias stage again, given the joint yarn stiffnesses");
                 f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
             }
         }
@@ -92,8 +93,8 @@ fn skipped_by_estimate(
             100.0 * m.change, 100.0 * m.curve_change, f.mesh_order(),
             super::mesh_check::rules_in_words()
         );
-        f.say(&note);
-        f.notes.push(note);
+        f.journal.say(&note);
+        f.journal.note(note);
         return true;
     }
     false
@@ -114,7 +115,7 @@ fn refinement_check(
     let now = f.fitted_forces(all, level)?;
     let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
     let change = super::mean_abs_finite(&d);
-    f.say(&format!(
+    f.journal.say(&format!(
         "the {}×{} fit's forces change by {:.3} % (mean) on {}×{}",
         from.0,
         from.1,
@@ -130,7 +131,7 @@ fn refinement_check(
         None
     };
     if let Some(m) = &check {
-        f.say(&format!(
+        f.journal.say(&format!(
             "refitting the {}×{} fit on {}×{} would change {} by {:.2} % and its curves by {:.2} % (first-order refit, measured)",
             from.0, from.1, level.0, level.1,
             if m.parameter.is_empty() { "no parameter" } else { &m.parameter },
@@ -176,7 +177,7 @@ fn fit_level(
         // a stage the last refinement left unchanged is not refitted (its law stays)
         if let Some(moved) = last_check.map(|m| m.stage_change(maps[k].dir)) {
             if li > 0 && moved < STAGE_UNCHANGED {
-                f.say(&format!(
+                f.journal.say(&format!(
                     "{} stage not refitted on {}×{}: refining changed its stiffness and tangents by {:.3} % at most (below {:.2} %)",
                     maps[k].dir.name(), level.0, level.1, 100.0 * moved, 100.0 * STAGE_UNCHANGED
                 ));
@@ -233,5 +234,5 @@ fn set_cutoff(f: &mut Fitter, k: usize, lo: [f64; 3], hi: [f64; 3]) {
             format!("cut-off |Ẽ12| ≤ {e12:.4}")
         }
     };
-    f.say(&msg);
+    f.journal.say(&msg);
 }

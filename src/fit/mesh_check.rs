@@ -371,14 +371,14 @@ impl Fitter<'_> {
             };
             // the stage's linearisation on `level`, or on the coarser level of its last fit
             // (a stage the ladder did not refit)
-            let found = self.linearised.iter().rev().find(|l| {
+            let found = self.evidence.linearised.iter().rev().find(|l| {
                 l.dir == Some(dir)
                     && l.level.0 <= level.0
                     && l.names.iter().filter(|n| n.contains("_alpha_")).count() == degree
             });
             out.extend(found.cloned());
         }
-        let bends = self.linearised.iter().rev();
+        let bends = self.evidence.linearised.iter().rev();
         out.extend(
             bends
                 .filter(|l| matches!(l.probe, Probe::Bends) && l.level == level)
@@ -452,7 +452,7 @@ impl Fitter<'_> {
             MeshCheckMode::Fine => (finer, 1.0),
             _ => (coarse, -(2f64.powf(-self.mesh_order()))),
         };
-        self.say(&format!(
+        self.journal.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
             solved_on.0, solved_on.1
         ));

@@ -48,6 +48,7 @@ pub mod coupling;
 mod degrees;
 pub mod html;
 mod joint;
+mod journal;
 mod ladder;
 pub mod map;
 mod measures;
@@ -209,18 +210,46 @@ fn is_determined(uncertainty: &[uncertainty::ParamError], name: &str) -> bool {
         .is_none_or(|e| e.determined)
 }
 
+/// The virtual lab a fit keeps warm across its stages ([`rigs`], [`thickness`]).
+#[derive(Default)]
+struct WarmLab {
+    /// strips already set up, warm
+    pub(super) rigs: HashMap<RigKey, StripRig>,
+    /// cantilevers already set up, warm ([`Fitter::bend_rigs`])
+    pub(super) bend_cache: HashMap<thickness::BendKey, crate::scene::BendRig>,
+    /// node forces already predicted, by strip and parameter bits
+    pub(super) predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
+    /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
+    pub(super) yarns: Option<crate::assembly::YarnRule>,
+    /// the yarn-to-shear ratio that sets new strips' β ([`Fitter::pin_yarns`])
+    pub(super) yarn_ratio: Option<f64>,
+}
+
+/// What the stages leave at their optima for the standard errors ([`uncertainty`]) and the
+/// mesh check ([`mesh_check`]).
+#[derive(Default)]
+struct Evidence {
+    /// every tensile stage's standard errors, with its variables at the optimum
+    pub(super) uncertainty: Vec<(Direction, Vec<f64>, Vec<uncertainty::ParamError>)>,
+    /// the thickness or bending stage's standard errors (last level)
+    pub(super) stage_errors: Vec<uncertainty::ParamError>,
+    /// every stage's linearisation at its optimum, for the mesh check
+    pub(super) linearised: Vec<mesh_check::Linearised>,
+    /// the refit change the ladder solves at its last level when it stops there (the finer
+    /// level solved): the final mesh check, solved rather than estimated
+    pub(super) ladder_check: Option<MeshCheck>,
+}
+
 /// The fitter's working state.
 struct Fitter<'a> {
     data: &'a FabricDataset,
     opts: &'a FitOptions,
-    progress: &'a mut dyn FnMut(&str),
-    start: Instant,
+    /// progress lines, notes and the degree log
+    journal: journal::Journal<'a>,
     stats: FitStats,
     law: Orthotropic,
     thickness: f64,
     a12: A12Rule,
-    degree_log: Vec<String>,
-    notes: Vec<String>,
     prep: Prepared,
     /// drape angles of the bend tests at the last thickness or bending stage's result
     bend_angles: Vec<f64>,
@@ -228,29 +257,14 @@ struct Fitter<'a> {
     own_bending: bool,
     /// those rigidities, once fitted
     bending: Option<BendingRigidity>,
-    /// every tensile stage's standard errors, with its variables at the optimum
-    uncertainty: Vec<(Direction, Vec<f64>, Vec<uncertainty::ParamError>)>,
-    /// the thickness or bending stage's standard errors (last level)
-    stage_errors: Vec<uncertainty::ParamError>,
-    /// every stage's linearisation at its optimum, for the mesh check
-    linearised: Vec<mesh_check::Linearised>,
-    /// the refit change the ladder solves at its last level when it stops there (the finer
-    /// level solved): the final mesh check, solved rather than estimated
-    ladder_check: Option<MeshCheck>,
+    /// what the stages leave for the standard errors and the mesh check
+    evidence: Evidence,
     /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
     bend_refine: u32,
     /// every strip on the ladder's level whatever its own refinement (cheap diagnostics)
     ladder_meshes: bool,
-    /// strips already set up, warm
-    rigs: HashMap<RigKey, StripRig>,
-    /// cantilevers already set up, warm ([`Fitter::bend_rigs`])
-    bend_cache: HashMap<thickness::BendKey, crate::scene::BendRig>,
-    /// node forces already predicted, by strip and parameter bits
-    predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
-    /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
-    yarns: Option<crate::assembly::YarnRule>,
-    /// the yarn-to-shear ratio that sets new strips' β ([`Fitter::pin_yarns`])
-    yarn_ratio: Option<f64>,
+    /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
+    lab: WarmLab,
     /// what the tension–shear coupling's trial decided ([`coupling`])
     coupling: coupling::CouplingOutcome,
     /// the rms relative error of the last tensile stage run (of the kept degree after a
@@ -261,11 +275,6 @@ struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
-    fn say(&mut self, msg: &str) {
-        let t = self.start.elapsed().as_secs_f64();
-        (self.progress)(&format!("[{t:7.1} s] {msg}"));
-    }
-
     fn material(&self) -> FabricMaterial {
         FabricMaterial {
             name: self.data.name.clone(),
@@ -287,10 +296,16 @@ impl Fitter<'_> {
                 Direction::Weft => (&self.law.weft, self.law.a22),
                 Direction::Shear => (&self.law.shear, self.law.g12),
             };
-            let found = self.uncertainty.iter().rev().find(|(d, _, errors)| {
-                *d == dir
-                    && errors.iter().filter(|e| e.name.contains("_alpha_")).count() == eta.degree()
-            });
+            let found = self
+                .evidence
+                .uncertainty
+                .iter()
+                .rev()
+                .find(|(d, _, errors)| {
+                    *d == dir
+                        && errors.iter().filter(|e| e.name.contains("_alpha_")).count()
+                            == eta.degree()
+                });
             if let Some((_, _, errors)) = found {
                 for e in errors {
                     let mut e = e.clone();
@@ -302,7 +317,7 @@ impl Fitter<'_> {
                 }
             }
         }
-        out.extend(self.stage_errors.iter().cloned());
+        out.extend(self.evidence.stage_errors.iter().cloned());
         out
     }
 

@@ -4,6 +4,7 @@
 //! and outputs in its signature; the [`Fitter`] carries the law being fitted, the warm strips
 //! and the notes, timings and progress lines that every stage adds to.
 
+use super::journal::Journal;
 use super::map::{A12Rule, Direction, StageMap};
 use super::measures::{self, Misfit, Objective};
 use super::mesh_check::{MeshCheck, MeshCheckMode};
@@ -35,7 +36,7 @@ pub fn fit(
     let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
     let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
     if sets.joint.is_some() {
-        f.notes.push(
+        f.journal.note(
             "joint sweep (--joint): the warp and weft stiffnesses refitted over the off-axis strips too, then the shear, on every mesh".into(),
         );
     }
@@ -44,7 +45,7 @@ pub fn fit(
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
     if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
         // the ladder's solved check is of the meshes ahead of the per-test refinement
-        f.ladder_check = None;
+        f.evidence.ladder_check = None;
     }
     let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &sets, last)?;
     let t0 = Instant::now();
@@ -55,16 +56,17 @@ pub fn fit(
     }
     f.time_stage("report", t0);
     closing_notes(&mut f);
-    f.stats.seconds = f.start.elapsed().as_secs_f64();
+    f.stats.seconds = f.journal.elapsed();
     let material = f.material();
     let yarn_rule = f.yarns();
+    let (notes, degree_log) = f.journal.finish();
     Ok(FitResult {
         material,
         method: format!("{:?}", opts.method).to_lowercase(),
         meshes,
         stats: f.stats,
-        degree_log: f.degree_log,
-        notes: f.notes,
+        degree_log,
+        notes,
         identifiability,
         uncertainty,
         tests,
@@ -161,8 +163,7 @@ impl<'a> Fitter<'a> {
         Fitter {
             data,
             opts,
-            progress,
-            start,
+            journal: Journal::new(progress, start, setup.notes),
             stats: FitStats::default(),
             law: Orthotropic {
                 a11: known.a11.unwrap_or(1.0e8),
@@ -177,23 +178,14 @@ impl<'a> Fitter<'a> {
             },
             thickness: known.thickness.unwrap_or(data.thickness),
             a12: setup.a12,
-            degree_log: Vec::new(),
-            notes: setup.notes,
             prep: setup.prep,
             bend_angles: Vec::new(),
             own_bending: setup.own_bending,
             bending: None,
-            uncertainty: Vec::new(),
-            stage_errors: Vec::new(),
-            linearised: Vec::new(),
-            ladder_check: None,
+            evidence: Default::default(),
             bend_refine: 0,
+            lab: Default::default(),
             ladder_meshes: false,
-            rigs: Default::default(),
-            bend_cache: Default::default(),
-            predictions: Default::default(),
-            yarns: None,
-            yarn_ratio: None,
             coupling: coupling::CouplingOutcome::Off,
             stage_rms: f64::NAN,
             screened: None,
@@ -279,7 +271,7 @@ fn checked_meshes(
     if opts.mesh_check == MeshCheckMode::Off {
         return Ok((uncertainty, None));
     }
-    let mut check = match f.ladder_check.take() {
+    let mut check = match f.evidence.ladder_check.take() {
         Some(m) => Some(m),
         None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
     };
@@ -301,7 +293,7 @@ fn closing_notes(f: &mut Fitter) {
     let t0 = Instant::now();
     if f.stats.unstable_solves > 0 {
         let n = f.stats.unstable_solves;
-        f.notes.push(format!(
+        f.journal.note(format!(
             "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip would wrinkle there); the measured points interpolated from them were excluded from the stage's objective (the curves' excluded_points count those of the final predictions)"
         ));
     }

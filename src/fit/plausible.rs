@@ -99,8 +99,8 @@ impl Fitter<'_> {
                 "the fitted {} law's stress stops rising at strain {e:.4}, inside the strains the tests reach: cut-off {name} lowered to {to:.4}, past which the law goes on along its tangent",
                 dir.name()
             );
-            self.say(&note);
-            self.notes.push(note);
+            self.journal.say(&note);
+            self.journal.note(note);
         }
     }
 }

@@ -167,7 +167,8 @@ pub(super) fn refine_tests(
     let mut any = false;
     loop {
         let t0 = Instant::now();
-        f.say("per-test meshes: every strip's mesh-error estimate");
+        f.journal
+            .say("per-test meshes: every strip's mesh-error estimate");
         let checks = f.strip_checks(last)?;
         f.time_stage("per-test meshes", t0);
         let todo: Vec<(usize, String)> = (0..checks.len())
@@ -268,8 +269,8 @@ pub(super) fn refine_for_check(
             100.0 * bend_moved,
             angle_moved
         );
-        f.say(&note);
-        f.notes.push(note);
+        f.journal.say(&note);
+        f.journal.note(note);
         f.bend_refine += 1;
     }
     double_and_refit(f, maps, sets, last, &todo)?;
@@ -295,8 +296,8 @@ fn double_and_refit(
             "per-test mesh: the {}° strip refined from {}x{} to {}x{} ({why})",
             strip.angle_deg, from.0, from.1, to.0, to.1
         );
-        f.say(&note);
-        f.notes.push(note);
+        f.journal.say(&note);
+        f.journal.note(note);
         f.prep.strips[*s].refine += 1;
     }
     let stages = &sets.own;
@@ -307,7 +308,7 @@ fn double_and_refit(
         if stages[k].is_empty() {
             continue;
         }
-        f.say(&format!(
+        f.journal.say(&format!(
             "{} stage refitted on its strips' own meshes",
             maps[k].dir.name()
         ));

@@ -41,7 +41,7 @@ impl Fitter<'_> {
     /// The yarn rule of every solve of the fit: `--yarn-rule`, with `auto` decided once by
     /// the law after the bootstrap ([`Fitter::decide_yarns`]; the full rule until then).
     pub(super) fn yarns(&self) -> YarnRule {
-        self.yarns.unwrap_or(YarnRule::Full)
+        self.lab.yarns.unwrap_or(YarnRule::Full)
     }
 
     /// Pins the centre rule's β for the strips set up from now on to the current law's
@@ -51,7 +51,7 @@ impl Fitter<'_> {
     /// fit of `paper_repro/stiff_fit` the bootstrap's ratio is far below the truth, and its β
     /// on every level biased G12 by −0.97 %).
     pub(super) fn pin_yarns(&mut self) {
-        self.yarn_ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        self.lab.yarn_ratio = crate::material::Law::yarn_shear_ratio(&self.law);
     }
 
     /// The rule of a strip cut at `angle`: the fit's, but `auto` keeps the full rule where
@@ -69,8 +69,8 @@ impl Fitter<'_> {
     pub(super) fn decide_yarns(&mut self) {
         let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
         let rule = self.opts.yarn_rule.resolve(ratio);
-        self.yarns = Some(rule);
-        self.yarn_ratio = ratio;
+        self.lab.yarns = Some(rule);
+        self.lab.yarn_ratio = ratio;
         if rule == YarnRule::Centre {
             let why = match self.opts.yarn_rule {
                 YarnRule::Auto => format!(
@@ -80,7 +80,7 @@ impl Fitter<'_> {
                 ),
                 _ => String::new(),
             };
-            self.notes.push(format!(
+            self.journal.note(format!(
                 "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
                 super::mesh_check::order(self.opts.grading, rule, ratio)
             ));
@@ -98,14 +98,14 @@ impl Fitter<'_> {
         let level = self.strip_level(s, level);
         let strip = &self.prep.strips[s];
         let key = self.rig_key(s, angle, level);
-        if let Some(rig) = self.rigs.remove(&key) {
+        if let Some(rig) = self.lab.rigs.remove(&key) {
             return Ok((key, rig));
         }
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
         t.grading = self.opts.grading;
         t.yarn_rule = self.strip_yarns(angle);
-        t.yarn_ratio = self.yarn_ratio;
+        t.yarn_ratio = self.lab.yarn_ratio;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
         t.solver.strategy = self.opts.strategy;
@@ -118,6 +118,7 @@ impl Fitter<'_> {
         // a strip cut at a nearby angle (the misalignment grid) starts from the nearest such
         // strip's equilibria rather than from rest
         let nearest = self
+            .lab
             .rigs
             .iter()
             .filter(|(k, _)| k.0[..2] == key.0[..2] && k.1 == key.1 && k.2 == key.2)
@@ -146,7 +147,7 @@ impl Fitter<'_> {
 
     pub(super) fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {
         rig.set_wanted(None);
-        self.rigs.insert(key, rig);
+        self.lab.rigs.insert(key, rig);
     }
 
     /// Runs a rig with `law` and the current thickness (forces, and ∂F/∂k when asked).
@@ -179,7 +180,7 @@ impl Fitter<'_> {
         let (key, mut rig) = self.strip_rig(s, angle, level)?;
         let law = self.law.clone();
         let memo_key = (key.clone(), self.param_bits());
-        if let Some(f) = self.predictions.get(&memo_key) {
+        if let Some(f) = self.lab.predictions.get(&memo_key) {
             let f = f.clone();
             self.keep_rig(key, rig);
             return Ok(f);
@@ -193,7 +194,7 @@ impl Fitter<'_> {
             });
         self.keep_rig(key, rig);
         if let Ok(f) = &out {
-            self.predictions.insert(memo_key, f.clone());
+            self.lab.predictions.insert(memo_key, f.clone());
         }
         out
     }
@@ -243,7 +244,10 @@ impl Fitter<'_> {
         let mut todo: Vec<(RigKey, StripRig, f64)> = Vec::new();
         for &(s, angle, level) in jobs {
             let (key, rig) = self.strip_rig(s, angle, level)?;
-            if self.predictions.contains_key(&(key.clone(), bits.clone()))
+            if self
+                .lab
+                .predictions
+                .contains_key(&(key.clone(), bits.clone()))
                 || todo.iter().any(|t| t.0 == key)
             {
                 self.keep_rig(key, rig);
@@ -277,7 +281,7 @@ impl Fitter<'_> {
                         pts.iter().map(|p| p.report.iterations).sum::<usize>();
                     self.stats.equilibria += pts.len();
                     let f: Vec<f64> = pts.iter().map(node_force).collect();
-                    self.predictions.insert((key.clone(), bits.clone()), f);
+                    self.lab.predictions.insert((key.clone(), bits.clone()), f);
                 }
                 Err(source) => {
                     failed.get_or_insert(FitError::Scene {

@@ -107,7 +107,7 @@ impl Fitter<'_> {
             // wrinkles are not the lab's: their branch can change with the mesh while the
             // frame's force does not (the shell's own 30° frame of a stiff-shear cotton on
             // 24 × 24 against 12 × 12: positions 181 % apart, forces 0.4 %)
-            self.notes.push(format!(
+            self.journal.note(format!(
                 "the shell does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %; buckled wrinkles take another branch on this mesh), so G12 is fitted to the measured force(s) alone",
                 describe(&targets, &at_shapes),
                 100.0 * SHAPE_TRUST
@@ -117,7 +117,7 @@ impl Fitter<'_> {
             };
             (g, f, "measured force(s)")
         } else {
-            self.notes.push(format!(
+            self.journal.note(format!(
                 "WARNING: the model does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %) and no force was measured: G12 stays assumed",
                 describe(&targets, &at_shapes),
                 100.0 * SHAPE_TRUST
@@ -130,19 +130,19 @@ impl Fitter<'_> {
         let evaluations = scan.evaluations;
         self.stats.evaluations += evaluations;
         let errors = scan.errors(g12);
-        self.say(&format!(
+        self.journal.say(&format!(
             "shapes stage: G12 = {g12:.4e} Pa from {} captured shape(s)' {basis} (assumed {g0:.4e} Pa), shape error {} ({evaluations} scene solves, objective {f:.3e})",
             targets.len(),
             describe(&targets, &errors)
         ));
         let edge = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp() * (1.0 - BRACKET);
         if g12 >= g0 * edge || g12 <= g0 / edge {
-            self.notes.push(format!(
+            self.journal.note(format!(
                 "WARNING: the fitted G12 lies at the end of the range searched ({}): the shape(s) may need a shear stiffness outside it",
                 scan_range(g0)
             ));
         }
-        self.notes.push(format!(
+        self.journal.note(format!(
             "G12 = {g12:.4e} Pa fitted to {} captured shape(s)' {basis} (no off-axis strip determines the shear; the shear law stays linear)",
             targets.len()
         ));

@@ -98,7 +98,7 @@ impl Fitter<'_> {
         let fixed = self.opts.fixed_degree;
         for degree in 2..=fixed.unwrap_or(self.opts.max_degree) {
             if fixed.is_none() && chosen.2 <= self.opts.degree_good {
-                self.degree_log.push(format!(
+                self.journal.degree(format!(
                     "{}: degree {} kept: error below {:.2} %",
                     map.dir.name(),
                     degree - 1,
@@ -144,7 +144,7 @@ impl Fitter<'_> {
             if fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2 {
                 chosen = candidate;
             } else {
-                self.degree_log.push(format!(
+                self.journal.degree(format!(
                     "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
                     map.dir.name(),
                     degree - 1,
@@ -157,8 +157,8 @@ impl Fitter<'_> {
     }
 
     pub(super) fn log_degree(&mut self, line: String) {
-        self.say(&line);
-        self.degree_log.push(line);
+        self.journal.say(&line);
+        self.journal.degree(line);
     }
 
     /// One tensile stage on the shell model at one mesh level, over the stage's strips;
@@ -205,7 +205,7 @@ impl Fitter<'_> {
         let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
         let shape = self.stage_optimum(&sp, &p, err);
         let msg = self.stage_line(&sp, &p, (err, shape), &rep);
-        self.say(&msg);
+        self.journal.say(&msg);
         if dropped > 0 {
             self.log_degree(format!(
                 "{}: {dropped} term(s) dropped on {}×{}: under {:.1} % of η' over the tested range",
@@ -322,7 +322,7 @@ impl Fitter<'_> {
             return Ok(false);
         }
         if rounds > 0 {
-            self.degree_log.push(note);
+            self.journal.degree(note);
         }
         Ok(true)
     }
@@ -332,7 +332,7 @@ impl Fitter<'_> {
     fn unsaturated_start(&mut self, map: StageMap) -> Vec<f64> {
         let p = map.encode_start(&self.law);
         if p != map.encode(&self.law) {
-            self.say(&format!(
+            self.journal.say(&format!(
                 "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
                 map.dir.name(),
                 100.0 * super::map::UNSATURATED
@@ -365,14 +365,18 @@ impl Fitter<'_> {
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
             let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.law);
-            self.uncertainty.push((map.dir, p.to_vec(), errors));
+            self.evidence
+                .uncertainty
+                .push((map.dir, p.to_vec(), errors));
             let tau = sp.tau;
             let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
                 super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, p, sp.strips)
             });
-            self.linearised.push(super::mesh_check::Linearised::tensile(
-                &map, p, &self.law, sp.strips, sp.level, j, lens, offaxis,
-            ));
+            self.evidence
+                .linearised
+                .push(super::mesh_check::Linearised::tensile(
+                    &map, p, &self.law, sp.strips, sp.level, j, lens, offaxis,
+                ));
         }
         shape
     }
@@ -478,7 +482,7 @@ pub(super) fn bootstrap_all(
     strips: &[Vec<usize>],
 ) -> Vec<Vec<f64>> {
     let t0 = Instant::now();
-    f.say("bootstrap on the homogeneous-strain strip");
+    f.journal.say("bootstrap on the homogeneous-strain strip");
     let mut shear_candidates = Vec::new();
     for k in 0..2 {
         let curves = f.used_curves(&strips[k]);
@@ -494,16 +498,16 @@ pub(super) fn bootstrap_all(
         (true, false) if known.a11.is_none() => {
             f.law.a11 = f.law.a22;
             f.law.warp = f.law.weft.clone();
-            f.notes
-                .push("warp not fitted (no 90° test): taken equal to the weft".into());
+            f.journal
+                .note("warp not fitted (no 90° test): taken equal to the weft".into());
         }
         (false, true) if known.a22.is_none() => {
             f.law.a22 = f.law.a11;
             f.law.weft = f.law.warp.clone();
-            f.notes
-                .push("weft not fitted (no 0° test): taken equal to the warp".into());
+            f.journal
+                .note("weft not fitted (no 0° test): taken equal to the warp".into());
         }
-        (true, true) => f.notes.push(
+        (true, true) => f.journal.note(
             "warp and weft not fitted (no 0° or 90° test): a11 and a22 as given in [known], linear"
                 .into(),
         ),
@@ -533,7 +537,7 @@ pub(super) fn bootstrap_all(
     } else if f.data.known.g12.is_none() {
         f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
         let g12 = f.law.g12;
-        f.notes.push(format!(
+        f.journal.note(format!(
             "{}: linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa",
             super::shapes::SHEAR_ASSUMED
         ));

@@ -58,7 +58,7 @@ impl Fitter<'_> {
         let mut out = Vec::with_capacity(bends.len());
         for b in bends {
             let mesh = bend_mesh(mesh_level, b);
-            let mut rig = match self.bend_cache.remove(&bend_key(b, mesh)) {
+            let mut rig = match self.lab.bend_cache.remove(&bend_key(b, mesh)) {
                 Some(rig) => rig,
                 None => {
                     let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
@@ -92,7 +92,8 @@ impl Fitter<'_> {
     ) {
         let mesh_level = self.bend_level(level);
         for (b, rig) in bends.iter().zip(rigs) {
-            self.bend_cache
+            self.lab
+                .bend_cache
                 .insert(bend_key(b, bend_mesh(mesh_level, b)), rig);
         }
     }
@@ -160,14 +161,16 @@ impl Fitter<'_> {
         self.stats.newton_iterations += newton;
         let (law, tau) = scaled(&p);
         if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
-            self.linearised.push(super::mesh_check::Linearised::bends(
-                level,
-                j,
-                &["thickness_mm"],
-                &[tau * 1e3],
-            ));
+            self.evidence
+                .linearised
+                .push(super::mesh_check::Linearised::bends(
+                    level,
+                    j,
+                    &["thickness_mm"],
+                    &[tau * 1e3],
+                ));
         }
-        self.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
+        self.evidence.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
             Some((r, j)) => super::uncertainty::log_errors(&["thickness_mm"], &[tau * 1e3], j, r),
             None => Vec::new(),
         };
@@ -202,7 +205,7 @@ impl Fitter<'_> {
             rep.evaluations,
             rep.stop
         );
-        self.say(&msg);
+        self.journal.say(&msg);
         self.time_stage("thickness", t0);
         Ok(())
     }

@@ -107,7 +107,7 @@ impl Fitter<'_> {
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.opts.grading;
             t.yarn_rule = self.strip_yarns(strip.angle_deg);
-            t.yarn_ratio = self.yarn_ratio;
+            t.yarn_ratio = self.lab.yarn_ratio;
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
@@ -116,7 +116,7 @@ impl Fitter<'_> {
             })?;
             // started between the node equilibria just solved with the same material
             let key = self.rig_key(s, strip.angle_deg, own);
-            if let Some(nodes) = self.rigs.get(&key) {
+            if let Some(nodes) = self.lab.rigs.get(&key) {
                 rig.warm_between(nodes);
             }
             checks.push((s, mids, rig));
@@ -155,7 +155,7 @@ impl Fitter<'_> {
 /// Every test's outcome at the final mesh level.
 pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestOutcome>, FitError> {
     let mut tests = Vec::new();
-    f.say("report: every curve at its nominal angle");
+    f.journal.say("report: every curve at its nominal angle");
     let jobs: Vec<(usize, f64)> = (0..f.prep.strips.len())
         .map(|s| (s, f.prep.strips[s].angle_deg))
         .collect();
@@ -165,7 +165,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
     let order = f.mesh_order();
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
-    f.say(&format!(
+    f.journal.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",
         half.0, half.1
     ));
@@ -200,7 +200,7 @@ fn curve_outcome(
     });
     if let Some(m) = mesh_error {
         if m > super::refine::mesh_tolerance(err) {
-            f.notes.push(format!(
+            f.journal.note(format!(
                 "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %, after {} of at most {} doublings of its own mesh: refine the ladder (--mesh-ladder)",
                 t.curve.display(),
                 curve.angle_deg,
@@ -260,7 +260,7 @@ fn repeat_scale(f: &mut Fitter, curve: &Curve, name: &str, model: &[f64]) -> (f6
         .collect();
     let excluded = model.len() - q.len();
     if excluded > 0 {
-        f.notes.push(format!(
+        f.journal.note(format!(
             "warning: {name} ({}°): {excluded} of {} points excluded from its errors: the model's equilibrium there is a saddle (the flat strip would wrinkle), whose force is not what the test measures",
             curve.angle_deg,
             model.len()
@@ -281,7 +281,8 @@ fn misalignment_check(
     last: (usize, usize),
 ) -> Result<(Option<f64>, Option<f64>), FitError> {
     let (mut misalign, mut aligned) = (None, None);
-    f.say(&format!("report: misalignment diagnostic of {name}"));
+    f.journal
+        .say(&format!("report: misalignment diagnostic of {name}"));
     // a diagnostic: on the first level's strips, whatever this one's own mesh
     f.ladder_meshes = true;
     let found = f.misalignment(c, f.opts.ladder[0]);
@@ -292,7 +293,7 @@ fn misalignment_check(
         aligned = Some(e);
         let m = f.opts.max_misalign_deg;
         if (d.abs() - m).abs() < 1e-9 {
-            f.notes.push(format!(
+            f.journal.note(format!(
                 "warning: validation {}° ({name}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
                 curve.angle_deg,
             ));
@@ -305,7 +306,8 @@ fn misalignment_check(
 fn interpolation_note(f: &mut Fitter) {
     let exact = f.prep.strips.iter().filter(|s| s.at_points).count();
     if exact < f.prep.strips.len() {
-        f.say("report: interpolation check (solves halfway between the nodes)");
+        f.journal
+            .say("report: interpolation check (solves halfway between the nodes)");
     }
     let at_points = if exact == 0 {
         String::new()
@@ -316,7 +318,7 @@ fn interpolation_note(f: &mut Fitter) {
         )
     };
     match f.interpolation_error() {
-        Ok(Some(worst)) => f.notes.push(format!(
+        Ok(Some(worst)) => f.journal.note(format!(
         "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}{at_points}",
         f.opts.nodes,
         100.0 * worst.0,
@@ -330,10 +332,10 @@ fn interpolation_note(f: &mut Fitter) {
         },
         if worst.0 > INTERPOLATION_TOL { "; warning: above 0.1 %, raise the node count" } else { "" }
     )),
-        Ok(None) => f.notes.push(
+        Ok(None) => f.journal.note(
             "model curves solved at every measured elongation (no strip has more of them than nodes): nothing interpolated, no interpolation error".to_string(),
         ),
-        Err(e) => f.notes.push(format!("warning: the interpolation check could not be made: {e}")),
+        Err(e) => f.journal.note(format!("warning: the interpolation check could not be made: {e}")),
     }
 }
 

@@ -65,8 +65,9 @@ impl Fitter<'_> {
             .iter()
             .map(|(n, c)| format!("{n} {:+.2} %", 100.0 * c))
             .collect();
-        self.say(&format!("mesh check, each change: {}", each.join(", ")));
-        self.say(&line);
-        self.notes.push(line);
+        self.journal
+            .say(&format!("mesh check, each change: {}", each.join(", ")));
+        self.journal.say(&line);
+        self.journal.note(line);
     }
 }
