@@ -9,10 +9,11 @@
 //! costs one factorisation and one energy evaluation, no assembly. With λ = 0 the step is
 //! Newton's, so convergence near the solution is quadratic. The backward-Euler solver stays as
 //! the last resort the paper asks for: after [`MAX_REJECTIONS`] rejections in a row, or when no
-//! shift makes the system positive definite, [`super::newton`]'s line-search solver (with its
+//! shift makes the system positive definite, [`super::line_search`]'s solver (with its
 //! fallback) takes over from the current state.
 
-use super::newton::{linearize, perturb, Balance};
+use super::measure::{linearize, Balance};
+use super::perturb::perturb;
 use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL, STEP_FORCING,
@@ -285,7 +286,7 @@ fn hand_over(
         max_iterations: opts.max_iterations.saturating_sub(before.iterations),
         ..*opts
     };
-    let (mut report, lin) = super::newton::line_search(model, system, x, &rest)?;
+    let (mut report, lin) = super::line_search::line_search(model, system, x, &rest)?;
     report.iterations += before.iterations;
     report.factorizations += before.factorizations;
     report.refinement_steps += before.refinement_steps;
