@@ -129,7 +129,7 @@ struct EdgeBuilder {
 }
 
 impl EdgeBuilder {
-    /// The edge from `a` to `b` of face `fi`: a new one, or the second face of one met before
+    /// The edge from `a` to `b` of face `fi`: a new one, or the second face of one met earlier
     /// (running the other way, else the mesh is non-manifold or inconsistently oriented).
     fn add(&mut self, fi: usize, a: u32, b: u32) -> Result<u32, TopologyError> {
         let key = (a.min(b), a.max(b));

@@ -33,14 +33,7 @@ pub(super) fn line_search(
     let mut s = Solver::new(model, system, x, opts);
     system.apply_constraints(x);
     for it in 0..=opts.max_iterations {
-        let (
-            energy,
-            Balance {
-                gnorm,
-                scale,
-                floor,
-            },
-        ) = linearize(
+        let (energy, balance) = linearize(
             model,
             system,
             x,
@@ -49,6 +42,11 @@ pub(super) fn line_search(
             (&s.external, s.external_scale),
             &mut s.report,
         )?;
+        let Balance {
+            gnorm,
+            scale,
+            floor,
+        } = balance;
         if s.converged(gnorm, scale, floor) {
             s.report.precision_limited = gnorm > opts.rtol * scale;
             // an equilibrium whose Hessian is not positive definite is a saddle (a flat strip in
@@ -428,7 +426,7 @@ impl<'a> Solver<'a> {
     }
 
     /// The report and linearisation of an equilibrium reached by a polished step: the tangent
-    /// is the one the step was computed on, stale by the residual it was computed at.
+    /// is the one the step is computed on, stale by the relative residual there.
     fn finish_polished(
         mut self,
         it: usize,

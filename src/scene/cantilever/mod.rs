@@ -9,8 +9,8 @@ use crate::assembly::{ShellModel, YarnRule, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
 use crate::solve::{
-    continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, SolveError, SolveReport,
-    Strategy,
+    continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, Slave, SolveError,
+    SolveReport, Strategy,
 };
 use crate::subdiv::BoundaryRule;
 use crate::Vec3;
@@ -236,30 +236,11 @@ impl CantileverBend {
         cont.iterations += spent.0;
         cont.factorizations += spent.1;
         let stable_out_of_plane = if self.in_plane {
-            let mut fixed = vec![false; 3 * nn];
-            for &d in &clamp.fixed {
-                fixed[d] = true;
-            }
-            let full = free_system(&model, &fixed, clamp_slaves)?;
-            Some(
-                crate::solve::is_stable(&model, &full, &x).map_err(|source| SceneError::Solve {
-                    stage: "out-of-plane stability check".into(),
-                    source,
-                })?,
-            )
+            Some(stable_out_of_plane(&model, &clamp.fixed, clamp_slaves, &x)?)
         } else {
             None
         };
-        let surface = model.basis.surface();
-        let eval = |(face, u): (usize, f64), v: f64| -> Result<Vec3, SceneError> {
-            let s = surface
-                .stencil(face, u, v)
-                .map_err(|e| SceneError::Basis(e.into()))?;
-            Ok(s.apply(&x).x())
-        };
-        let edge = eval(edge, 0.0)?;
-        let tip = eval(tip, 1.0)?;
-        let angle = (-(tip[2] - edge[2])).atan2(tip[1] - edge[1]).to_degrees();
+        let (angle, tip) = drape_angle(&model, (edge, tip), &x)?;
         Ok(BendResult {
             drape_angle_deg: angle,
             tip,
@@ -270,6 +251,46 @@ impl CantileverBend {
             stable_out_of_plane,
         })
     }
+}
+
+/// Whether the in-plane equilibrium `x` is stable with the out-of-plane DOFs free too (only
+/// the clamp's `fixed` DOFs held, its `slaves` following).
+fn stable_out_of_plane(
+    model: &ShellModel,
+    clamp_fixed: &[usize],
+    slaves: Vec<Slave>,
+    x: &[Vec3],
+) -> Result<bool, SceneError> {
+    let nn = model.num_nodes();
+    let mut fixed = vec![false; 3 * nn];
+    for &d in clamp_fixed {
+        fixed[d] = true;
+    }
+    let full = free_system(model, &fixed, slaves)?;
+    crate::solve::is_stable(model, &full, x).map_err(|source| SceneError::Solve {
+        stage: "out-of-plane stability check".into(),
+        source,
+    })
+}
+
+/// The drape angle (degrees) between the limit points at the clamped edge (v = 0) and the tip
+/// (v = 1) of the strip at `x`, given as (face, u) each, and the tip's position.
+fn drape_angle(
+    model: &ShellModel,
+    (edge, tip): ((usize, f64), (usize, f64)),
+    x: &[Vec3],
+) -> Result<(f64, Vec3), SceneError> {
+    let surface = model.basis.surface();
+    let eval = |(face, u): (usize, f64), v: f64| -> Result<Vec3, SceneError> {
+        let s = surface
+            .stencil(face, u, v)
+            .map_err(|e| SceneError::Basis(e.into()))?;
+        Ok(s.apply(x).x())
+    };
+    let edge = eval(edge, 0.0)?;
+    let tip = eval(tip, 1.0)?;
+    let angle = (-(tip[2] - edge[2])).atan2(tip[1] - edge[1]).to_degrees();
+    Ok((angle, tip))
 }
 
 /// Iterations allowed to Newton from the elastica start; past them the load ramp takes over.

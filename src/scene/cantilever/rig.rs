@@ -250,7 +250,7 @@ impl BendRig {
         Ok((angle, dangle))
     }
 
-    /// ∂angle/∂k at the equilibrium `x` by the adjoint of the tangent, the angle measured
+    /// ∂angle/∂k at the equilibrium `x` by the adjoint of the tangent, the angle taken
     /// between the edge and tip points of the stencils `se` and `st` ((dy, dz) apart); keeps
     /// ∂q/∂k for the next run's start.
     fn angle_sensitivities(
