@@ -83,19 +83,10 @@ pub(super) fn line_search(
                     energy,
                     chord_steps,
                 } => {
-                    // the steps did not reach rtol but went down in energy and residual, or
-                    // reached it where the tangent is not certified: they stand as this
-                    // iteration's step, and the next linearises there
-                    s.report.polish_misses += 1;
-                    s.report.chord_steps += chord_steps;
-                    s.history.push((energy, gnorm));
-                    s.be_energy.clear();
+                    s.polish_moved(energy, chord_steps, gnorm);
                     continue;
                 }
-                Polish::Missed { chord_steps } => {
-                    s.report.polish_misses += 1;
-                    s.report.chord_steps += chord_steps;
-                }
+                Polish::Missed { chord_steps } => s.polish_missed(chord_steps),
             }
         }
         let (accepted, alpha) = s.search(x, energy, it);
@@ -423,6 +414,22 @@ impl<'a> Solver<'a> {
             (&self.external, self.external_scale),
             &self.values,
         )
+    }
+
+    /// A polish whose steps did not reach rtol but went down in energy and residual, or reached
+    /// it where the tangent is not certified: they stand as this iteration's step (ending at
+    /// `energy`), and the next linearises there.
+    fn polish_moved(&mut self, energy: f64, chord_steps: usize, gnorm: f64) {
+        self.report.polish_misses += 1;
+        self.report.chord_steps += chord_steps;
+        self.history.push((energy, gnorm));
+        self.be_energy.clear();
+    }
+
+    /// A polish that left `x` where it is.
+    fn polish_missed(&mut self, chord_steps: usize) {
+        self.report.polish_misses += 1;
+        self.report.chord_steps += chord_steps;
     }
 
     /// The report and linearisation of an equilibrium reached by a polished step: the tangent
