@@ -85,104 +85,128 @@ pub struct Topology {
     edge_index: HashMap<(u32, u32), u32>,
 }
 
+/// Checks that face `fi` has at least three corners, each a vertex of the mesh (`nv` of them),
+/// none used twice.
+fn check_face(fi: usize, face: &[u32], nv: usize) -> Result<(), TopologyError> {
+    if face.len() < 3 {
+        return Err(TopologyError::at(
+            fi,
+            format!(
+                "face {fi} has {} corners; a face needs at least 3",
+                face.len()
+            ),
+        ));
+    }
+    for (k, &v) in face.iter().enumerate() {
+        if v as usize >= nv {
+            return Err(TopologyError::at(
+                fi,
+                format!(
+                    "face {fi} uses vertex {} but the mesh has {nv} vertices",
+                    v + 1
+                ),
+            ));
+        }
+        if face[..k].contains(&v) {
+            return Err(TopologyError::at(
+                fi,
+                format!("face {fi} uses vertex {} twice", v + 1),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The edges met so far while walking the faces, each with its faces and the direction its
+/// first face runs along it.
+#[derive(Default)]
+struct EdgeBuilder {
+    edge_index: HashMap<(u32, u32), u32>,
+    edges: Vec<[u32; 2]>,
+    edge_faces: Vec<[u32; 2]>,
+    /// direction of the edge as seen by its first face: true when it runs small -> large
+    first_dir: Vec<bool>,
+}
+
+impl EdgeBuilder {
+    /// The edge from `a` to `b` of face `fi`: a new one, or the second face of one met earlier
+    /// (running the other way, else the mesh is non-manifold or inconsistently oriented).
+    fn add(&mut self, fi: usize, a: u32, b: u32) -> Result<u32, TopologyError> {
+        let key = (a.min(b), a.max(b));
+        let forward = a < b;
+        Ok(match self.edge_index.get(&key) {
+            None => {
+                let e = self.edges.len() as u32;
+                self.edge_index.insert(key, e);
+                self.edges.push([key.0, key.1]);
+                self.edge_faces.push([fi as u32, NO_FACE]);
+                self.first_dir.push(forward);
+                e
+            }
+            Some(&e) => {
+                let slot = &mut self.edge_faces[e as usize];
+                if slot[1] != NO_FACE {
+                    return Err(TopologyError::at(
+                        fi,
+                        format!(
+                            "non-manifold edge: vertices {} and {} are shared by more than two faces",
+                            key.0 + 1,
+                            key.1 + 1
+                        ),
+                    ));
+                }
+                if slot[0] == fi as u32 {
+                    return Err(TopologyError::at(
+                        fi,
+                        format!("face {fi} uses the edge {}-{} twice", key.0 + 1, key.1 + 1),
+                    ));
+                }
+                if self.first_dir[e as usize] == forward {
+                    return Err(TopologyError::at(
+                        fi,
+                        format!(
+                            "inconsistent orientation: face {fi} runs along edge {}-{} in the same direction as face {}",
+                            a + 1,
+                            b + 1,
+                            slot[0]
+                        ),
+                    ));
+                }
+                slot[1] = fi as u32;
+                e
+            }
+        })
+    }
+}
+
 impl Topology {
     /// Builds incidence and checks that the mesh is a consistently oriented 2-manifold, possibly
     /// with boundary. Vertices used by no face are allowed (they carry no surface) and reported
     /// by [`Topology::isolated_vertices`].
     pub fn build(mesh: &PolyMesh) -> Result<Self, TopologyError> {
         let nv = mesh.positions.len();
-        let mut edge_index: HashMap<(u32, u32), u32> = HashMap::new();
-        let mut edges = Vec::new();
-        let mut edge_faces: Vec<[u32; 2]> = Vec::new();
-        // direction of the edge as seen by its first face: true when it runs small -> large
-        let mut first_dir: Vec<bool> = Vec::new();
+        let mut builder = EdgeBuilder::default();
         let mut face_edges = Vec::with_capacity(mesh.faces.len());
         let mut vertex_faces = vec![Vec::new(); nv];
 
         for (fi, face) in mesh.faces.iter().enumerate() {
-            if face.len() < 3 {
-                return Err(TopologyError::at(
-                    fi,
-                    format!(
-                        "face {fi} has {} corners; a face needs at least 3",
-                        face.len()
-                    ),
-                ));
-            }
-            for (k, &v) in face.iter().enumerate() {
-                if v as usize >= nv {
-                    return Err(TopologyError::at(
-                        fi,
-                        format!(
-                            "face {fi} uses vertex {} but the mesh has {nv} vertices",
-                            v + 1
-                        ),
-                    ));
-                }
-                if face[..k].contains(&v) {
-                    return Err(TopologyError::at(
-                        fi,
-                        format!("face {fi} uses vertex {} twice", v + 1),
-                    ));
-                }
-            }
+            check_face(fi, face, nv)?;
             let mut fe = Vec::with_capacity(face.len());
             for k in 0..face.len() {
                 let a = face[k];
                 let b = face[(k + 1) % face.len()];
-                let key = (a.min(b), a.max(b));
-                let forward = a < b;
-                let e = match edge_index.get(&key) {
-                    None => {
-                        let e = edges.len() as u32;
-                        edge_index.insert(key, e);
-                        edges.push([key.0, key.1]);
-                        edge_faces.push([fi as u32, NO_FACE]);
-                        first_dir.push(forward);
-                        e
-                    }
-                    Some(&e) => {
-                        let slot = &mut edge_faces[e as usize];
-                        if slot[1] != NO_FACE {
-                            return Err(TopologyError::at(
-                                fi,
-                                format!(
-                                    "non-manifold edge: vertices {} and {} are shared by more than two faces",
-                                    key.0 + 1,
-                                    key.1 + 1
-                                ),
-                            ));
-                        }
-                        if slot[0] == fi as u32 {
-                            return Err(TopologyError::at(
-                                fi,
-                                format!(
-                                    "face {fi} uses the edge {}-{} twice",
-                                    key.0 + 1,
-                                    key.1 + 1
-                                ),
-                            ));
-                        }
-                        if first_dir[e as usize] == forward {
-                            return Err(TopologyError::at(
-                                fi,
-                                format!(
-                                    "inconsistent orientation: face {fi} runs along edge {}-{} in the same direction as face {}",
-                                    a + 1,
-                                    b + 1,
-                                    slot[0]
-                                ),
-                            ));
-                        }
-                        slot[1] = fi as u32;
-                        e
-                    }
-                };
+                let e = builder.add(fi, a, b)?;
                 fe.push(e);
                 vertex_faces[a as usize].push(fi as u32);
             }
             face_edges.push(fe);
         }
+        let EdgeBuilder {
+            edge_index,
+            edges,
+            edge_faces,
+            ..
+        } = builder;
 
         let mut valence = vec![0u32; nv];
         let mut boundary_edges_at = vec![0u32; nv];
@@ -204,14 +228,21 @@ impl Topology {
             on_boundary: boundary_edges_at.iter().map(|&n| n > 0).collect(),
             edge_index,
         };
-        // Vertex manifoldness: the faces around a vertex form one fan.
+        topo.check_fans(mesh, &boundary_edges_at)?;
+        Ok(topo)
+    }
+
+    /// Vertex manifoldness: the faces around each vertex form one fan, with no or two boundary
+    /// edges (`boundary_edges_at`).
+    fn check_fans(&self, mesh: &PolyMesh, boundary_edges_at: &[u32]) -> Result<(), TopologyError> {
+        let nv = mesh.positions.len();
         for v in 0..nv {
-            let faces = &topo.vertex_faces[v];
+            let faces = &self.vertex_faces[v];
             if faces.is_empty() {
                 continue;
             }
             let nb = boundary_edges_at[v];
-            let fans = topo.count_fans(mesh, v as u32);
+            let fans = self.count_fans(mesh, v as u32);
             if fans != 1 || (nb != 0 && nb != 2) {
                 let last = *faces.iter().max().unwrap_or(&0) as usize;
                 return Err(TopologyError::at(
@@ -223,7 +254,7 @@ impl Topology {
                 ));
             }
         }
-        Ok(topo)
+        Ok(())
     }
 
     /// Number of edge-connected groups among the faces around `v`.

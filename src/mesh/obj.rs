@@ -69,71 +69,9 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
         let line = raw.split('#').next().unwrap_or("").trim();
         let mut words = line.split_whitespace();
         match words.next() {
-            Some("v") => {
-                let mut xyz = [0.0; 3];
-                for (k, c) in xyz.iter_mut().enumerate() {
-                    let w = words.next().ok_or_else(|| {
-                        err(lineno, format!("vertex needs 3 coordinates, found {k}"))
-                    })?;
-                    *c = w
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|x| x.is_finite())
-                        .ok_or_else(|| err(lineno, format!("bad vertex coordinate '{w}'")))?;
-                    if c.abs() > MAX_COORDINATE {
-                        return Err(err(
-                            lineno,
-                            format!("vertex coordinate {w} is larger than {MAX_COORDINATE:e} in magnitude (the surface's derivatives would overflow)"),
-                        ));
-                    }
-                }
-                positions.push(xyz);
-            }
+            Some("v") => positions.push(parse_vertex(&mut words, lineno, &err)?),
             Some("f") => {
-                let mut face = Vec::new();
-                for w in words {
-                    let idx = w.split('/').next().unwrap_or("");
-                    let n: i64 = idx
-                        .parse()
-                        .map_err(|_| err(lineno, format!("bad vertex index '{w}'")))?;
-                    // negative indices count back from the vertices read so far; positive
-                    // ones may refer forward and are checked once the whole file is read
-                    let resolved = if n > 0 {
-                        n - 1
-                    } else if n < 0 {
-                        let count = positions.len() as i64;
-                        if count + n < 0 {
-                            return Err(err(
-                                lineno,
-                                format!(
-                                    "vertex index {n} out of range ({count} vertices defined so far)"
-                                ),
-                            ));
-                        }
-                        count + n
-                    } else {
-                        return Err(err(
-                            lineno,
-                            "vertex index 0 (OBJ indices start at 1)".into(),
-                        ));
-                    };
-                    let resolved = u32::try_from(resolved).map_err(|_| {
-                        err(
-                            lineno,
-                            format!(
-                                "vertex index {n} is beyond the {} vertices a mesh may have",
-                                u32::MAX
-                            ),
-                        )
-                    })?;
-                    face.push(resolved);
-                }
-                if face.len() < 3 {
-                    return Err(err(
-                        lineno,
-                        format!("face has {} vertices; a face needs at least 3", face.len()),
-                    ));
-                }
+                let face = parse_face(words, lineno, positions.len(), &err)?;
                 faces.push(face);
                 face_lines.push(lineno);
             }
@@ -174,6 +112,85 @@ pub fn parse_obj(text: &str, name: &str) -> Result<ObjMesh, ObjError> {
         topology,
         face_lines,
     })
+}
+
+/// The coordinates of a `v` line (`words` after the `v`).
+fn parse_vertex<'a>(
+    words: &mut impl Iterator<Item = &'a str>,
+    lineno: usize,
+    err: &impl Fn(usize, String) -> ObjError,
+) -> Result<[f64; 3], ObjError> {
+    let mut xyz = [0.0; 3];
+    for (k, c) in xyz.iter_mut().enumerate() {
+        let w = words
+            .next()
+            .ok_or_else(|| err(lineno, format!("vertex needs 3 coordinates, found {k}")))?;
+        *c = w
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| err(lineno, format!("bad vertex coordinate '{w}'")))?;
+        if c.abs() > MAX_COORDINATE {
+            return Err(err(
+                lineno,
+                format!("vertex coordinate {w} is larger than {MAX_COORDINATE:e} in magnitude (the surface's derivatives would overflow)"),
+            ));
+        }
+    }
+    Ok(xyz)
+}
+
+/// The 0-based vertex indices of an `f` line (`words` after the `f`), `count` vertices read so
+/// far.
+fn parse_face<'a>(
+    words: impl Iterator<Item = &'a str>,
+    lineno: usize,
+    count: usize,
+    err: &impl Fn(usize, String) -> ObjError,
+) -> Result<Vec<u32>, ObjError> {
+    let mut face = Vec::new();
+    for w in words {
+        let idx = w.split('/').next().unwrap_or("");
+        let n: i64 = idx
+            .parse()
+            .map_err(|_| err(lineno, format!("bad vertex index '{w}'")))?;
+        // negative indices count back from the vertices read so far; positive
+        // ones may refer forward and are checked once the whole file is read
+        let resolved = if n > 0 {
+            n - 1
+        } else if n < 0 {
+            let count = count as i64;
+            if count + n < 0 {
+                return Err(err(
+                    lineno,
+                    format!("vertex index {n} out of range ({count} vertices defined so far)"),
+                ));
+            }
+            count + n
+        } else {
+            return Err(err(
+                lineno,
+                "vertex index 0 (OBJ indices start at 1)".into(),
+            ));
+        };
+        let resolved = u32::try_from(resolved).map_err(|_| {
+            err(
+                lineno,
+                format!(
+                    "vertex index {n} is beyond the {} vertices a mesh may have",
+                    u32::MAX
+                ),
+            )
+        })?;
+        face.push(resolved);
+    }
+    if face.len() < 3 {
+        return Err(err(
+            lineno,
+            format!("face has {} vertices; a face needs at least 3", face.len()),
+        ));
+    }
+    Ok(face)
 }
 
 /// Writes a mesh as OBJ text (1-based indices, full precision).

@@ -18,6 +18,7 @@ pub mod plate;
 pub mod roof;
 pub mod sheet;
 pub mod sphere;
+mod surface;
 mod tensile;
 pub mod tri;
 

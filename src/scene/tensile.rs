@@ -11,6 +11,7 @@ use crate::Vec3;
 use std::sync::Arc;
 
 mod attempts;
+mod point;
 mod tangents;
 mod warm;
 
@@ -326,80 +327,22 @@ impl StripRig {
         for i in 0..self.elongations.len() {
             let started = std::time::Instant::now();
             let dl = self.elongations[i];
-            let mut warm = self.warm_start(i);
-            // a point solved earlier: a fitter's trial caps its cold solve (`retry_iterations`)
-            let stored = warm.is_some();
-            warm = warm.filter(|_| !lost_branch);
-            if doubt {
-                warm =
-                    warm.filter(|w| self.warm_beats_predictor(w, &previous, before.as_ref(), dl));
-            }
-            // a warm start that needs many iterations has wandered off (parameters far from
-            // the last run's): give up early and solve from the predictor instead
-            let warm_solved = match warm {
-                Some(x) => self
-                    .solve_at(dl, x, self.solver.max_iterations.min(WARM_ITERATIONS))
-                    .ok(),
-                None => None,
-            };
-            doubt = warm_solved
-                .as_ref()
-                .is_none_or(|r| r.1.initial_residual.unwrap_or(0.0) > warm::POOR_START);
-            lost_branch |= warm_solved.as_ref().is_some_and(|r| r.1.saddle_escapes > 0);
-            let (x, mut report, lin) = match warm_solved {
-                Some(r) => r,
-                None if stored => {
-                    let limit = self
-                        .retry_iterations
-                        .unwrap_or(self.solver.max_iterations)
-                        .min(self.solver.max_iterations);
-                    self.solve_cold(&previous, before.as_ref(), dl, limit)
-                        .map_err(|e| self.point_failure(e))?
-                }
-                None => self
-                    .solve_cold(&previous, before.as_ref(), dl, self.solver.max_iterations)
-                    .map_err(|e| self.point_failure(e))?,
-            };
+            let (x, mut report, lin) = self.solve_point(
+                i,
+                dl,
+                (&previous, before.as_ref()),
+                &mut doubt,
+                &mut lost_branch,
+            )?;
             report.iterations += std::mem::take(&mut self.spent);
             report.factorizations += std::mem::take(&mut self.spent_factorizations);
             // the point's time is that of all its attempts, as its iterations are (the last
             // attempt's alone understated a wrinkling point's several times over)
             report.seconds = started.elapsed().as_secs_f64();
-            let reaction_error = |e: crate::material::OutOfDomain| SceneError::Solve {
-                stage: "reaction".into(),
-                source: SolveError::StartOutOfDomain(e.to_string()),
-            };
-            // the reactions: the solver's own gradient at the solution where it hands one back
-            let grad = match &lin {
-                Some(l) => &l.gradient,
-                None => {
-                    self.model
-                        .assemble(&x, crate::assembly::Want::Gradient, Some(&mut grad), None)
-                        .map_err(reaction_error)?;
-                    &grad
-                }
-            };
-            let force: f64 = self
-                .motion
-                .iter()
-                .map(|&(d, r)| r * grad[d / 3][d % 3])
-                .sum();
+            let force = self.reaction(&x, lin.as_ref(), &mut grad)?;
             let slope = lin.as_ref().map(|l| self.elongation_tangent(l));
             let dforce = if sensitivities {
-                let (df, dq, fresh, indefinite) =
-                    self.force_sensitivities(&x, lin)
-                        .map_err(|source| SceneError::Solve {
-                            stage: format!("sensitivities at elongation {:.4} mm", dl * 1e3),
-                            source,
-                        })?;
-                self.tangents[i] = Some((self.params.clone(), dq));
-                // a tangent factorised again for the sensitivities counts as an iteration
-                report.iterations += usize::from(fresh);
-                report.factorizations += usize::from(fresh);
-                // a saddle found only here is reported like one the solve found: the fitter
-                // leaves its point out of the objective
-                report.stable &= !indefinite;
-                df
+                self.point_sensitivities(i, dl, &x, lin, &mut report)?
             } else {
                 self.tangents[i] = None;
                 Vec::new()
@@ -412,19 +355,7 @@ impl StripRig {
             };
             each(&point);
             out.push(point);
-            let params = Some(self.params.clone());
-            if self.solved_params[i] != params {
-                if let (Some(x0), Some(k0)) =
-                    (self.equilibria[i].take(), self.solved_params[i].take())
-                {
-                    let earlier = &mut self.earlier[i];
-                    earlier.retain(|e| e.1.len() == k0.len());
-                    earlier.insert(0, (x0, k0));
-                    earlier.truncate(warm::SECANTS);
-                }
-            }
-            self.equilibria[i] = Some(x.clone());
-            self.solved_params[i] = params;
+            self.keep_equilibrium(i, &x);
             before = previous.map(|p| (p.0, p.1));
             previous = Some((dl, x, slope));
         }

@@ -6,8 +6,8 @@
 //! about an eighth of a Hessian assembly on the shell (`cargo bench --bench shell`) and
 //! no factorisation.
 
-use super::linearization::hessian_times;
-use super::newton::{balance, uniform};
+use super::certificate::certified;
+use super::measure::balance;
 use super::{FreeSystem, NewtonOptions};
 use crate::model::{ClothModel, Want};
 use crate::Vec3;
@@ -27,18 +27,6 @@ const CHORD_STEPS: usize = 5;
 
 /// A chord step must cut the residual at least this much, or the chord is abandoned.
 const CHORD_RATE: f64 = 0.1;
-
-/// Power steps of the stability certificate ([`certified`]).
-const CERTIFICATE_STEPS: usize = 3;
-
-/// Inverse-iteration steps on K₀ that turn the certificate's random start towards K₀'s soft
-/// modes ([`certified`]).
-const SOFT_STEPS: usize = 2;
-
-/// The certificate's bound on the spectral radius of K₀⁻¹(K − K₀): K is positive definite
-/// wherever the radius is under 1, and the margin covers what three power steps can
-/// underestimate.
-const CERTIFICATE_RADIUS: f64 = 0.3;
 
 /// The last step of a converging Newton solve, taken whole on the factorisation that computed
 /// it and checked by one gradient assembly, without a further Hessian assembly and
@@ -141,57 +129,6 @@ pub(super) fn polish(
         }
         None => Polish::Missed { chord_steps: taken },
     }
-}
-
-/// Whether the tangent K at the equilibrium `x` (gradient `grad`) is positive definite, judged
-/// from the factorised, positive definite K₀ of a nearby point without assembling K: K =
-/// K₀(I + M) with M = K₀⁻¹(K − K₀), so K is positive definite wherever the spectral radius of
-/// M is under 1. An eigenvalue θ of M is vᵀ(K − K₀)v / vᵀK₀v for its mode v, so a small
-/// change of the tangent reaches θ = −1 only along K₀'s soft modes: the pseudo-random start
-/// (deterministic) is first turned towards them by [`SOFT_STEPS`] back-substitutions, then
-/// [`CERTIFICATE_STEPS`] power steps, each one gradient assembly (K v by a forward
-/// difference) and one back-substitution, estimate the radius, which must stay under
-/// [`CERTIFICATE_RADIUS`]. A heuristic bound, not a proof (a power estimate is a lower bound
-/// of the radius); conservative where the tangent stiffened (θ ≫ 0 fails it too), and a
-/// failure costs only the Newton iteration the chord saved.
-pub(super) fn certified(
-    model: &dyn ClothModel,
-    system: &FreeSystem,
-    x: &[Vec3],
-    grad: &[Vec3],
-    llt: &Llt<usize, f64>,
-) -> bool {
-    let nf = system.num_free;
-    let mut seed = 0x2545_f491_4f6c_dd1du64;
-    let mut v: Vec<f64> = (0..nf).map(|_| uniform(&mut seed)).collect();
-    // inverse iteration on K₀ first (back-substitutions only): the start leans to K₀'s soft
-    // modes, the only ones a small change of the tangent can turn negative
-    for _ in 0..SOFT_STEPS {
-        llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut v, nf, 1));
-        let vn = super::norm(&v);
-        if vn == 0.0 || !vn.is_finite() {
-            return false;
-        }
-        v.iter_mut().for_each(|a| *a /= vn);
-    }
-    let mut radius = f64::INFINITY;
-    for _ in 0..CERTIFICATE_STEPS {
-        let vn = super::norm(&v);
-        if vn == 0.0 || !vn.is_finite() {
-            return false;
-        }
-        v.iter_mut().for_each(|a| *a /= vn);
-        // T v over every DOF (the slaves follow their masters)
-        let Ok(kv) = hessian_times(model, x, grad, &system.expand(&v)) else {
-            return false;
-        };
-        let mut u = system.reduced(&kv);
-        llt.solve_in_place(MatMut::from_column_major_slice_mut(&mut u, nf, 1));
-        u.iter_mut().zip(&v).for_each(|(a, b)| *a -= b);
-        radius = super::norm(&u);
-        v = u;
-    }
-    radius.is_finite() && radius <= CERTIFICATE_RADIUS
 }
 
 /// What a polish came to.

@@ -34,7 +34,7 @@ pub(super) fn direction(
     seed: &mut u64,
 ) -> Option<(Vec<f64>, f64)> {
     let nf = system.num_free;
-    let mut v: Vec<f64> = (0..nf).map(|_| super::newton::uniform(seed)).collect();
+    let mut v: Vec<f64> = (0..nf).map(|_| super::perturb::uniform(seed)).collect();
     let m_norm = |v: &[f64]| -> f64 {
         v.iter()
             .zip(mass)
@@ -83,7 +83,7 @@ pub(super) fn search(
     if vmax == 0.0 {
         return false;
     }
-    let mut tau = FIRST_STEP * super::newton::size(x) / vmax;
+    let mut tau = FIRST_STEP * super::perturb::size(x) / vmax;
     for _ in 0..30 {
         let model_drop = -(tau * sign * slope + 0.5 * curvature * tau * tau);
         trial.copy_from_slice(x);

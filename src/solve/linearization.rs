@@ -1,6 +1,7 @@
 //! The tangent at an equilibrium, factorised once for any number of right-hand sides (the
 //! sensitivity system of Clyde et al. 2017, Eq. 6).
 
+use super::certificate::hessian_times;
 use super::{refine, FreeSystem, Precision, SolveError};
 use crate::model::{BlockMatrix, ClothModel, Want};
 use crate::Vec3;
@@ -151,7 +152,9 @@ impl Linearization {
         model
             .assemble(x, Want::Gradient, Some(&mut grad), None)
             .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-        Ok(super::chord::certified(model, system, x, &grad, &self.llt))
+        Ok(super::certificate::certified(
+            model, system, x, &grad, &self.llt,
+        ))
     }
 
     /// Whether the tangent is far enough from the solution's for
@@ -212,35 +215,3 @@ pub const REFINE_FROM: f64 = 1e-6;
 
 /// Most refinement steps of [`Linearization::solve_at_solution`].
 pub const ADJOINT_REFINEMENTS: usize = 8;
-
-/// H(x) v over every DOF, by a forward difference of the gradient `grad` at `x` (one gradient
-/// assembly: an eighth of a Hessian assembly on the shell, by `cargo bench --bench
-/// shell`). The step is √ε of the body's size along v, so the product is good to about √ε
-/// relative.
-pub(super) fn hessian_times(
-    model: &dyn ClothModel,
-    x: &[Vec3],
-    grad: &[Vec3],
-    v: &[Vec3],
-) -> Result<Vec<Vec3>, SolveError> {
-    let vmax = v.iter().flatten().fold(0.0f64, |m, a| m.max(a.abs()));
-    let mut out = vec![[0.0; 3]; x.len()];
-    if vmax == 0.0 {
-        return Ok(out);
-    }
-    let h = f64::EPSILON.sqrt() * super::newton::size(x).max(f64::MIN_POSITIVE) / vmax;
-    let moved: Vec<Vec3> = x
-        .iter()
-        .zip(v)
-        .map(|(p, d)| std::array::from_fn(|c| p[c] + h * d[c]))
-        .collect();
-    model
-        .assemble(&moved, Want::Gradient, Some(&mut out), None)
-        .map_err(|e| SolveError::StartOutOfDomain(e.to_string()))?;
-    for (o, g) in out.iter_mut().zip(grad) {
-        for c in 0..3 {
-            o[c] = (o[c] - g[c]) / h;
-        }
-    }
-    Ok(out)
-}

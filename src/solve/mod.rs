@@ -15,12 +15,17 @@
 //! known to ε‖x‖∞; thin shells, whose stiffness spans ten decades, reach this floor first and
 //! the report says so).
 
+mod certificate;
 mod chord;
 mod continuation;
 mod curvature;
 pub mod dump;
+mod fallback;
+mod line_search;
 mod linearization;
+mod measure;
 mod newton;
+mod perturb;
 pub mod refine;
 mod system;
 pub mod trust;
@@ -89,7 +94,7 @@ pub struct NewtonOptions {
     /// line-search strategies only; the trust region assembles at its last point as at any other.
     pub polish: bool,
     /// Relative residual under which a polished Newton step may be finished by chord steps on
-    /// its own factorisation (see `newton::polish`); the linearisation handed back is then the
+    /// its own factorisation (see `chord::polish`); the linearisation handed back is then the
     /// tangent where the chord began, marked [`Linearization::stale`]. Under √rtol it changes
     /// nothing.
     pub chord_from: f64,

@@ -3,7 +3,7 @@
 //! set and reused by every numeric factorisation.
 
 use super::{refine, SolveError};
-use crate::model::{BlockMatrix, ClothModel};
+use crate::model::{BlockMatrix, BlockPattern, ClothModel};
 use crate::Vec3;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -39,6 +39,111 @@ pub struct FreeSystem {
     symbolic: SymbolicLlt<usize>,
 }
 
+/// The free index of every DOF (`NOT_FREE` where `fixed` or `is_slave`), the number of free DOFs,
+/// and each DOF's row of T: (free index, coefficient) pairs.
+#[allow(clippy::type_complexity)]
+fn free_map(
+    fixed: &[bool],
+    is_slave: &[bool],
+    slaves: &[Slave],
+    ndof: usize,
+) -> Result<(Vec<u32>, usize, Vec<Vec<(u32, f64)>>), SolveError> {
+    let mut free_index = vec![NOT_FREE; ndof];
+    let mut num_free = 0;
+    for d in 0..ndof {
+        if !fixed[d] && !is_slave[d] {
+            free_index[d] = num_free as u32;
+            num_free += 1;
+        }
+    }
+    let mut map: Vec<Vec<(u32, f64)>> = (0..ndof)
+        .map(|d| match free_index[d] {
+            NOT_FREE => Vec::new(),
+            f => vec![(f, 1.0)],
+        })
+        .collect();
+    for s in slaves {
+        let mut m = Vec::with_capacity(s.masters.len());
+        for &(d, c) in &s.masters {
+            match free_index.get(d) {
+                Some(&f) if f != NOT_FREE => m.push((f, c)),
+                _ => {
+                    return Err(SolveError::Setup(format!(
+                        "DOF {} is slaved to DOF {d}, which is not free",
+                        s.dof
+                    )))
+                }
+            }
+        }
+        map[s.dof] = m;
+    }
+    Ok((free_index, num_free, map))
+}
+
+/// Every (col, row, block, r, c, coef) of the lower triangle of Tᵀ H T, H's blocks on the
+/// pattern `p` and T's rows in `map`, sorted by (col, row).
+fn reduced_entries(p: &BlockPattern, map: &[Vec<(u32, f64)>]) -> Vec<(u32, u32, u32, u8, u8, f64)> {
+    let mut entries: Vec<(u32, u32, u32, u8, u8, f64)> = Vec::new();
+    let mut visit = |s: usize, t: usize, k: usize, a: usize, b: usize| {
+        for &(pr, cr) in &map[s] {
+            for &(qc, cc) in &map[t] {
+                if pr >= qc {
+                    entries.push((qc, pr, k as u32, a as u8, b as u8, cr * cc));
+                }
+            }
+        }
+    };
+    for i in 0..p.num_nodes {
+        for k in p.row_ptr[i]..p.row_ptr[i + 1] {
+            let j = p.col[k] as usize;
+            for a in 0..3 {
+                for b in 0..3 {
+                    visit(3 * i + a, 3 * j + b, k, a, b);
+                    if i != j {
+                        visit(3 * j + b, 3 * i + a, k, a, b);
+                    }
+                }
+            }
+        }
+    }
+    entries.sort_unstable_by_key(|e| (e.0, e.1));
+    entries
+}
+
+/// The compressed columns of the sorted `entries`: column pointers, row indices, each entry's
+/// (stored position, block, r, c, coef), and the position of each diagonal entry.
+#[allow(clippy::type_complexity)]
+fn compress(
+    entries: &[(u32, u32, u32, u8, u8, f64)],
+    num_free: usize,
+) -> (
+    Vec<usize>,
+    Vec<usize>,
+    Vec<(u32, u32, u8, u8, f64)>,
+    Vec<usize>,
+) {
+    let mut col_ptr = vec![0usize; num_free + 1];
+    let mut row_idx = Vec::new();
+    let mut contrib = Vec::with_capacity(entries.len());
+    let mut diag = vec![0usize; num_free];
+    let mut last: Option<(u32, u32)> = None;
+    for &(col, row, k, a, b, coef) in entries {
+        if last != Some((col, row)) {
+            row_idx.push(row as usize);
+            col_ptr[col as usize + 1] = row_idx.len();
+            if row == col {
+                diag[col as usize] = row_idx.len() - 1;
+            }
+            last = Some((col, row));
+        }
+        contrib.push(((row_idx.len() - 1) as u32, k, a, b, coef));
+    }
+    for c in 0..num_free {
+        col_ptr[c + 1] = col_ptr[c + 1].max(col_ptr[c]);
+    }
+    (col_ptr, row_idx, contrib, diag)
+}
+
 impl FreeSystem {
     /// Builds the free-DOF structure for `fixed` (one flag per DOF).
     pub fn new(model: &dyn ClothModel, fixed: &[bool]) -> Result<Self, SolveError> {
@@ -69,79 +174,9 @@ impl FreeSystem {
             }
             is_slave[s.dof] = true;
         }
-        let mut free_index = vec![NOT_FREE; ndof];
-        let mut num_free = 0;
-        for d in 0..ndof {
-            if !fixed[d] && !is_slave[d] {
-                free_index[d] = num_free as u32;
-                num_free += 1;
-            }
-        }
-        let mut map: Vec<Vec<(u32, f64)>> = (0..ndof)
-            .map(|d| match free_index[d] {
-                NOT_FREE => Vec::new(),
-                f => vec![(f, 1.0)],
-            })
-            .collect();
-        for s in &slaves {
-            let mut m = Vec::with_capacity(s.masters.len());
-            for &(d, c) in &s.masters {
-                match free_index.get(d) {
-                    Some(&f) if f != NOT_FREE => m.push((f, c)),
-                    _ => {
-                        return Err(SolveError::Setup(format!(
-                            "DOF {} is slaved to DOF {d}, which is not free",
-                            s.dof
-                        )))
-                    }
-                }
-            }
-            map[s.dof] = m;
-        }
-        // every (row, col, block, r, c, coef) of the lower triangle of Tᵀ H T
-        let mut entries: Vec<(u32, u32, u32, u8, u8, f64)> = Vec::new();
-        let mut visit = |s: usize, t: usize, k: usize, a: usize, b: usize| {
-            for &(pr, cr) in &map[s] {
-                for &(qc, cc) in &map[t] {
-                    if pr >= qc {
-                        entries.push((qc, pr, k as u32, a as u8, b as u8, cr * cc));
-                    }
-                }
-            }
-        };
-        for i in 0..p.num_nodes {
-            for k in p.row_ptr[i]..p.row_ptr[i + 1] {
-                let j = p.col[k] as usize;
-                for a in 0..3 {
-                    for b in 0..3 {
-                        visit(3 * i + a, 3 * j + b, k, a, b);
-                        if i != j {
-                            visit(3 * j + b, 3 * i + a, k, a, b);
-                        }
-                    }
-                }
-            }
-        }
-        entries.sort_unstable_by_key(|e| (e.0, e.1));
-        let mut col_ptr = vec![0usize; num_free + 1];
-        let mut row_idx = Vec::new();
-        let mut contrib = Vec::with_capacity(entries.len());
-        let mut diag = vec![0usize; num_free];
-        let mut last: Option<(u32, u32)> = None;
-        for &(col, row, k, a, b, coef) in &entries {
-            if last != Some((col, row)) {
-                row_idx.push(row as usize);
-                col_ptr[col as usize + 1] = row_idx.len();
-                if row == col {
-                    diag[col as usize] = row_idx.len() - 1;
-                }
-                last = Some((col, row));
-            }
-            contrib.push(((row_idx.len() - 1) as u32, k, a, b, coef));
-        }
-        for c in 0..num_free {
-            col_ptr[c + 1] = col_ptr[c + 1].max(col_ptr[c]);
-        }
+        let (free_index, num_free, map) = free_map(fixed, &is_slave, &slaves, ndof)?;
+        let entries = reduced_entries(p, &map);
+        let (col_ptr, row_idx, contrib, diag) = compress(&entries, num_free);
         let sym =
             SymbolicSparseColMatRef::new_checked(num_free, num_free, &col_ptr, None, &row_idx);
         let symbolic = SymbolicLlt::try_new(sym, Side::Lower)

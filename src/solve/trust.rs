@@ -9,10 +9,11 @@
 //! costs one factorisation and one energy evaluation, no assembly. With λ = 0 the step is
 //! Newton's, so convergence near the solution is quadratic. The backward-Euler solver stays as
 //! the last resort the paper asks for: after [`MAX_REJECTIONS`] rejections in a row, or when no
-//! shift makes the system positive definite, [`super::newton`]'s line-search solver (with its
+//! shift makes the system positive definite, [`super::line_search`]'s solver (with its
 //! fallback) takes over from the current state.
 
-use super::newton::{linearize, perturb, Balance};
+use super::measure::{linearize, Balance};
+use super::perturb::perturb;
 use super::{
     norm, refine, FreeSystem, Linearization, NewtonOptions, SolveError, SolveReport, Strategy,
     STALL_RTOL, STEP_FORCING,
@@ -64,14 +65,7 @@ pub(super) fn trust_region(
     let (mut at_floor, mut last_residual) = (false, f64::INFINITY);
     system.apply_constraints(x);
     for it in 0..=opts.max_iterations {
-        let (
-            energy,
-            Balance {
-                gnorm,
-                scale,
-                floor,
-            },
-        ) = linearize(
+        let (energy, balance) = linearize(
             model,
             system,
             x,
@@ -80,6 +74,11 @@ pub(super) fn trust_region(
             (&external, external_scale),
             &mut report,
         )?;
+        let Balance {
+            gnorm,
+            scale,
+            floor,
+        } = balance;
         // as in Newton: a step that does not halve a residual under STALL_RTOL is at the floor
         let stalled = gnorm <= STALL_RTOL * scale && (at_floor || gnorm >= 0.5 * last_residual);
         last_residual = gnorm;
@@ -109,28 +108,16 @@ pub(super) fn trust_region(
             break;
         }
         metric(system, &values, &mass, &mut scaling);
-        let mut taken = false;
-        for _ in 0..MAX_REJECTIONS {
-            match try_step(
-                model,
-                system,
-                x,
-                &mut trial,
-                (&values, &gf, &scaling),
-                energy,
-                &mut lambda,
-                opts,
-                &mut report,
-                &mut seed,
-            )? {
-                Some(Trial::Taken) => {
-                    taken = true;
-                    break;
-                }
-                Some(Trial::Rejected) => report.backtracks += 1,
-                None => break,
-            }
-        }
+        let taken = step(
+            model,
+            system,
+            (x, &mut trial),
+            (&values, &gf, &scaling),
+            energy,
+            &mut lambda,
+            opts,
+            (&mut report, &mut seed),
+        )?;
         if !taken {
             if gnorm <= STALL_RTOL * scale {
                 at_floor = true;
@@ -144,6 +131,40 @@ pub(super) fn trust_region(
         residual: report.residual,
         factorizations: report.factorizations,
     })
+}
+
+/// Trial steps from `x` until one is taken (true), the shift cannot make the system positive
+/// definite, or [`MAX_REJECTIONS`] are rejected (false); rejections count as backtracks.
+#[allow(clippy::too_many_arguments)]
+fn step(
+    model: &dyn ClothModel,
+    system: &FreeSystem,
+    (x, trial): (&mut [Vec3], &mut [Vec3]),
+    (values, gf, scaling): (&[f64], &[f64], &[f64]),
+    energy: f64,
+    lambda: &mut f64,
+    opts: &NewtonOptions,
+    (report, seed): (&mut SolveReport, &mut u64),
+) -> Result<bool, SolveError> {
+    for _ in 0..MAX_REJECTIONS {
+        match try_step(
+            model,
+            system,
+            x,
+            trial,
+            (values, gf, scaling),
+            energy,
+            lambda,
+            opts,
+            report,
+            seed,
+        )? {
+            Some(Trial::Taken) => return Ok(true),
+            Some(Trial::Rejected) => report.backtracks += 1,
+            None => break,
+        }
+    }
+    Ok(false)
 }
 
 /// One trial step with the current shift; updates λ from the ratio ρ. `None`: no shift up to
@@ -285,7 +306,7 @@ fn hand_over(
         max_iterations: opts.max_iterations.saturating_sub(before.iterations),
         ..*opts
     };
-    let (mut report, lin) = super::newton::line_search(model, system, x, &rest)?;
+    let (mut report, lin) = super::line_search::line_search(model, system, x, &rest)?;
     report.iterations += before.iterations;
     report.factorizations += before.factorizations;
     report.refinement_steps += before.refinement_steps;

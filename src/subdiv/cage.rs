@@ -91,6 +91,16 @@ pub(crate) struct CageAdjacency {
     pub boundary_edges: Vec<u8>,
 }
 
+/// The undirected edges of a cage and the incidences a refinement step needs.
+struct CageEdges {
+    edge_id: HashMap<(u32, u32), u32>,
+    /// (a, b) with a < b (see `edge_key`), in order of first appearance
+    edges: Vec<(u32, u32)>,
+    edge_faces: Vec<Vec<u32>>,
+    vertex_faces: Vec<Vec<u32>>,
+    vertex_edges: Vec<Vec<u32>>,
+}
+
 impl<T: Affine> Cage<T> {
     pub fn adjacency(&self) -> CageAdjacency {
         let n = self.points.len();
@@ -118,6 +128,26 @@ impl<T: Affine> Cage<T> {
 
     /// One Catmull–Clark step over every face of the cage.
     pub fn refine(&self) -> Cage<T> {
+        let edges = self.edges();
+        let face_pts = self.face_points();
+        let edge_pts = self.edge_points(&edges, &face_pts);
+        let vertex_pts = self.vertex_points(&edges, &face_pts);
+        let faces = self.refined_faces(&edges);
+        let (complete, boundary) = self.refined_flags(&edges);
+        let mut points = vertex_pts;
+        points.extend(edge_pts);
+        points.extend(face_pts);
+        Cage {
+            points,
+            faces,
+            complete,
+            boundary,
+        }
+    }
+
+    /// The cage's undirected edges with their faces, in order of first appearance, and the
+    /// faces and edges around each vertex.
+    fn edges(&self) -> CageEdges {
         let nv = self.points.len();
         // undirected edges with their faces, in order of first appearance
         let mut edge_id: HashMap<(u32, u32), u32> = HashMap::new();
@@ -139,20 +169,34 @@ impl<T: Affine> Cage<T> {
                 vertex_faces[f[k] as usize].push(fi as u32);
             }
         }
-        let ne = edges.len();
-        let p = &self.points;
+        CageEdges {
+            edge_id,
+            edges,
+            edge_faces,
+            vertex_faces,
+            vertex_edges,
+        }
+    }
 
-        let face_pts: Vec<Option<T>> = self
-            .faces
+    /// The face points: each face's centroid.
+    fn face_points(&self) -> Vec<Option<T>> {
+        let p = &self.points;
+        self.faces
             .iter()
             .map(|f| {
                 let w = 1.0 / f.len() as f64;
                 let terms: Vec<_> = f.iter().map(|&v| (w, &p[v as usize])).collect();
                 combine(&terms)
             })
-            .collect();
+            .collect()
+    }
 
-        let edge_pts: Vec<Option<T>> = (0..ne)
+    /// The edge points (`None` past a cut).
+    fn edge_points(&self, e: &CageEdges, face_pts: &[Option<T>]) -> Vec<Option<T>> {
+        let (edges, edge_faces) = (&e.edges, &e.edge_faces);
+        let ne = edges.len();
+        let p = &self.points;
+        (0..ne)
             .map(|e| {
                 let (a, b) = edges[e];
                 let (pa, pb) = (&p[a as usize], &p[b as usize]);
@@ -167,9 +211,16 @@ impl<T: Affine> Cage<T> {
                     _ => None,
                 }
             })
-            .collect();
+            .collect()
+    }
 
-        let vertex_pts: Vec<Option<T>> = (0..nv)
+    /// The vertex points (`None` at an incomplete vertex).
+    fn vertex_points(&self, e: &CageEdges, face_pts: &[Option<T>]) -> Vec<Option<T>> {
+        let (edges, edge_faces) = (&e.edges, &e.edge_faces);
+        let (vertex_faces, vertex_edges) = (&e.vertex_faces, &e.vertex_edges);
+        let nv = self.points.len();
+        let p = &self.points;
+        (0..nv)
             .map(|v| {
                 let pv = &p[v];
                 if !self.complete[v] {
@@ -216,8 +267,14 @@ impl<T: Affine> Cage<T> {
                     combine(&[(0.125, b0), (0.75, pv), (0.125, b1)])
                 }
             })
-            .collect();
+            .collect()
+    }
 
+    /// The refined faces: four quads per corner of each face, in the order of the points
+    /// (vertex points, then edge points, then face points).
+    fn refined_faces(&self, e: &CageEdges) -> Vec<Vec<u32>> {
+        let (edge_id, ne) = (&e.edge_id, e.edges.len());
+        let nv = self.points.len();
         let ep = |a: u32, b: u32| nv as u32 + edge_id[&edge_key(a, b)];
         let mut faces = Vec::with_capacity(4 * self.faces.len());
         for (fi, f) in self.faces.iter().enumerate() {
@@ -231,6 +288,14 @@ impl<T: Affine> Cage<T> {
             }
         }
 
+        faces
+    }
+
+    /// Which refined points are complete, and the refined cage's true boundary edges.
+    fn refined_flags(&self, e: &CageEdges) -> (Vec<bool>, HashSet<(u32, u32)>) {
+        let (edges, edge_faces) = (&e.edges, &e.edge_faces);
+        let ne = edges.len();
+        let nv = self.points.len();
         let mut complete = self.complete.clone();
         complete
             .extend((0..ne).map(|e| edge_faces[e].len() == 2 || self.boundary.contains(&edges[e])));
@@ -245,15 +310,7 @@ impl<T: Affine> Cage<T> {
             }
         }
 
-        let mut points = vertex_pts;
-        points.extend(edge_pts);
-        points.extend(face_pts);
-        Cage {
-            points,
-            faces,
-            complete,
-            boundary,
-        }
+        (complete, boundary)
     }
 
     /// The cage made of every face that touches a corner of `face` (given in the vertex order

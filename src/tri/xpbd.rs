@@ -11,7 +11,7 @@
 //! hinge, against Newton's assembly and factorisation; the price is the sweep count, which
 //! grows with the stiffness ratio (the reason the solver comparison exists).
 
-use super::model::TriModel;
+use super::model::{HingeEl, TriModel, Triangle};
 use super::params::TriKind;
 use crate::model::{ClothModel, Want};
 use crate::Vec3;
@@ -98,16 +98,7 @@ pub fn xpbd(
     let k = |i: usize| m.curves[i].k[0];
     let stiffness = Matrix3::new(k(0), m.coupling, 0.0, m.coupling, k(1), 0.0, 0.0, 0.0, k(2));
     let n = model.num_nodes();
-    let mass = model.lumped_mass();
-    let w: Vec<f64> = (0..n)
-        .map(|i| {
-            if fixed[3 * i..3 * i + 3].iter().any(|&f| f) {
-                0.0
-            } else {
-                1.0 / mass[i]
-            }
-        })
-        .collect();
+    let w = inverse_masses(model, fixed);
     let force = model.external_load();
     let dt2 = opts.dt * opts.dt;
     // compliance blocks α̃ = (A K)⁻¹ / Δt² and hinge compliances h / (D l Δt²)
@@ -128,7 +119,6 @@ pub fn xpbd(
             h.height / (d * h.length * dt2)
         })
         .collect();
-    let v = |p: Vec3| Vector3::new(p[0], p[1], p[2]);
     for _ in 0..opts.steps {
         for i in 0..n {
             if w[i] > 0.0 {
@@ -141,64 +131,127 @@ pub fn xpbd(
         let mut lh = vec![0.0; model.hinges.len()];
         for _ in 0..opts.sweeps {
             for (ti, t) in model.triangles.iter().enumerate() {
-                let p: [Vector3<f64>; 3] = t.nodes.map(|i| v(x[i as usize]));
-                let wu = t.cu[0] * p[0] + t.cu[1] * p[1] + t.cu[2] * p[2];
-                let wv = t.cv[0] * p[0] + t.cv[1] * p[1] + t.cv[2] * p[2];
-                let c = Vector3::new(
-                    0.5 * (wu.norm_squared() - 1.0),
-                    0.5 * (wv.norm_squared() - 1.0),
-                    wu.dot(&wv),
-                );
-                // gradient rows per node: ∂C/∂x_a = [cu_a w_u; cv_a w_v; cu_a w_v + cv_a w_u]
-                let grad = |a: usize| -> [Vector3<f64>; 3] {
-                    [t.cu[a] * wu, t.cv[a] * wv, t.cu[a] * wv + t.cv[a] * wu]
-                };
-                let mut s = tri_alpha[ti];
-                let gs: Vec<[Vector3<f64>; 3]> = (0..3).map(grad).collect();
-                for (a, g) in gs.iter().enumerate() {
-                    let wa = w[t.nodes[a] as usize];
-                    for r in 0..3 {
-                        for q in 0..3 {
-                            s[(r, q)] += wa * g[r].dot(&g[q]);
-                        }
-                    }
-                }
-                let rhs = -c - tri_alpha[ti] * lt[ti];
-                let dl = s.try_inverse().ok_or(XpbdError::Degenerate)? * rhs;
-                lt[ti] += dl;
-                for (a, g) in gs.iter().enumerate() {
-                    let i = t.nodes[a] as usize;
-                    let dx = w[i] * (g[0] * dl[0] + g[1] * dl[1] + g[2] * dl[2]);
-                    for q in 0..3 {
-                        x[i][q] += dx[q];
-                    }
-                }
+                project_triangle(t, &tri_alpha[ti], &mut lt[ti], &w, x)?;
             }
             for (hi, h) in model.hinges.iter().enumerate() {
-                let p: [Vector3<f64>; 4] = h.nodes.map(|i| v(x[i as usize]));
-                let e = p[1] - p[0];
-                let na = e.cross(&(p[2] - p[0]));
-                let nb = (p[3] - p[0]).cross(&e);
-                let c = (na.cross(&nb).dot(&e) / e.norm()).atan2(na.dot(&nb));
-                let g = dihedral_gradient(p);
-                let ww: f64 = (0..4)
-                    .map(|a| w[h.nodes[a] as usize] * g[a].norm_squared())
-                    .sum();
-                let denom = ww + hinge_alpha[hi];
-                if !(denom > 0.0 && c.is_finite()) {
-                    return Err(XpbdError::Degenerate);
-                }
-                let dl = (-c - hinge_alpha[hi] * lh[hi]) / denom;
-                lh[hi] += dl;
-                for a in 0..4 {
-                    let i = h.nodes[a] as usize;
-                    for q in 0..3 {
-                        x[i][q] += w[i] * g[a][q] * dl;
-                    }
-                }
+                project_hinge(h, hinge_alpha[hi], &mut lh[hi], &w, x)?;
             }
         }
     }
+    let residual = residual(model, fixed, &w, &force, x)?;
+    Ok(XpbdReport {
+        steps: opts.steps,
+        sweeps: opts.steps * opts.sweeps,
+        residual,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The inverse lumped mass of each node, 0 where the node is held.
+fn inverse_masses(model: &TriModel, fixed: &[bool]) -> Vec<f64> {
+    let n = model.num_nodes();
+    let mass = model.lumped_mass();
+    (0..n)
+        .map(|i| {
+            if fixed[3 * i..3 * i + 3].iter().any(|&f| f) {
+                0.0
+            } else {
+                1.0 / mass[i]
+            }
+        })
+        .collect()
+}
+
+fn v(p: Vec3) -> Vector3<f64> {
+    Vector3::new(p[0], p[1], p[2])
+}
+
+/// One Gauss–Seidel update of a triangle's strain constraints (compliance block `alpha`,
+/// multipliers `lambda`): a 3 × 3 block solve, then the nodes moved by M⁻¹ ∇Cᵀ Δλ.
+fn project_triangle(
+    t: &Triangle,
+    alpha: &Matrix3<f64>,
+    lambda: &mut Vector3<f64>,
+    w: &[f64],
+    x: &mut [Vec3],
+) -> Result<(), XpbdError> {
+    let p: [Vector3<f64>; 3] = t.nodes.map(|i| v(x[i as usize]));
+    let wu = t.cu[0] * p[0] + t.cu[1] * p[1] + t.cu[2] * p[2];
+    let wv = t.cv[0] * p[0] + t.cv[1] * p[1] + t.cv[2] * p[2];
+    let c = Vector3::new(
+        0.5 * (wu.norm_squared() - 1.0),
+        0.5 * (wv.norm_squared() - 1.0),
+        wu.dot(&wv),
+    );
+    // gradient rows per node: ∂C/∂x_a = [cu_a w_u; cv_a w_v; cu_a w_v + cv_a w_u]
+    let grad = |a: usize| -> [Vector3<f64>; 3] {
+        [t.cu[a] * wu, t.cv[a] * wv, t.cu[a] * wv + t.cv[a] * wu]
+    };
+    let mut s = *alpha;
+    let gs: Vec<[Vector3<f64>; 3]> = (0..3).map(grad).collect();
+    for (a, g) in gs.iter().enumerate() {
+        let wa = w[t.nodes[a] as usize];
+        for r in 0..3 {
+            for q in 0..3 {
+                s[(r, q)] += wa * g[r].dot(&g[q]);
+            }
+        }
+    }
+    let rhs = -c - alpha * *lambda;
+    let dl = s.try_inverse().ok_or(XpbdError::Degenerate)? * rhs;
+    *lambda += dl;
+    for (a, g) in gs.iter().enumerate() {
+        let i = t.nodes[a] as usize;
+        let dx = w[i] * (g[0] * dl[0] + g[1] * dl[1] + g[2] * dl[2]);
+        for q in 0..3 {
+            x[i][q] += dx[q];
+        }
+    }
+    Ok(())
+}
+
+/// One Gauss–Seidel update of a hinge's angle constraint (compliance `alpha`, multiplier
+/// `lambda`).
+fn project_hinge(
+    h: &HingeEl,
+    alpha: f64,
+    lambda: &mut f64,
+    w: &[f64],
+    x: &mut [Vec3],
+) -> Result<(), XpbdError> {
+    let p: [Vector3<f64>; 4] = h.nodes.map(|i| v(x[i as usize]));
+    let e = p[1] - p[0];
+    let na = e.cross(&(p[2] - p[0]));
+    let nb = (p[3] - p[0]).cross(&e);
+    let c = (na.cross(&nb).dot(&e) / e.norm()).atan2(na.dot(&nb));
+    let g = dihedral_gradient(p);
+    let ww: f64 = (0..4)
+        .map(|a| w[h.nodes[a] as usize] * g[a].norm_squared())
+        .sum();
+    let denom = ww + alpha;
+    if !(denom > 0.0 && c.is_finite()) {
+        return Err(XpbdError::Degenerate);
+    }
+    let dl = (-c - alpha * *lambda) / denom;
+    *lambda += dl;
+    for a in 0..4 {
+        let i = h.nodes[a] as usize;
+        for q in 0..3 {
+            x[i][q] += w[i] * g[a][q] * dl;
+        }
+    }
+    Ok(())
+}
+
+/// ‖g over the free DOFs‖ relative to the larger of ‖f‖ and ‖g‖ at `x`.
+fn residual(
+    model: &TriModel,
+    fixed: &[bool],
+    w: &[f64],
+    force: &[Vec3],
+    x: &[Vec3],
+) -> Result<f64, XpbdError> {
+    let n = model.num_nodes();
     let mut g = vec![[0.0; 3]; n];
     model
         .assemble(x, Want::Gradient, Some(&mut g), None)
@@ -209,11 +262,6 @@ pub fn xpbd(
         .sum::<f64>()
         .sqrt();
     let norm = |v: &[Vec3]| v.iter().flatten().map(|c| c * c).sum::<f64>().sqrt();
-    let scale = norm(&force).max(norm(&g)).max(1e-300);
-    Ok(XpbdReport {
-        steps: opts.steps,
-        sweeps: opts.steps * opts.sweeps,
-        residual: free / scale,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    let scale = norm(force).max(norm(&g)).max(1e-300);
+    Ok(free / scale)
 }

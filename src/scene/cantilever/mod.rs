@@ -9,47 +9,15 @@ use crate::assembly::{ShellModel, YarnRule, STANDARD_GRAVITY};
 use crate::material::FabricMaterial;
 use crate::mesh::Grading;
 use crate::solve::{
-    continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, SolveError, SolveReport,
-    Strategy,
+    continuation, newton, ContinuationReport, FreeSystem, NewtonOptions, Slave, SolveError,
+    SolveReport, Strategy,
 };
 use crate::subdiv::BoundaryRule;
 use crate::Vec3;
-use std::sync::Arc;
 
-/// An ASTM D1388 cantilever (self-weight only) set up once for repeated runs with changing
-/// material parameters: the fitter's forward model of a bend test. Each run starts from the
-/// last equilibrium (moved along ∂q/∂k to the new parameters where the last run computed
-/// sensitivities), held to `WARM_ITERATIONS` where the elastica can follow; then, for a warp or
-/// weft cut under the full-step strategy, from the heavy elastica (`elastica_start`); then by a load ramp from the flat
-/// strip.
-pub struct BendRig {
-    bend: CantileverBend,
-    model: ShellModel,
-    system: FreeSystem,
-    equilibrium: Option<Vec<Vec3>>,
-    /// the parameters (law, thickness, then the rigidities when the bending is its own) of
-    /// the last equilibrium and ∂q/∂k there (reduced, one row per parameter), where the last
-    /// run computed sensitivities: the next run starts from q + ∂q/∂k Δk
-    tangent: Option<(Vec<f64>, Vec<Vec<f64>>)>,
-    /// the law's parameters and the thickness of the current material
-    material_params: Vec<f64>,
-    /// the current parameters, in the order of `tangent` (set at each run)
-    params: Vec<f64>,
-    /// (face, u) of the mid-width point of the clamped edge (v = 0) and of the tip (v = 1)
-    edge: (usize, f64),
-    tip: (usize, f64),
-}
+mod rig;
 
-/// A bend run with, when asked for, ∂angle/∂k (law parameters, then thickness, then the bending
-/// rigidities when the bending is its own; degrees).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BendPoint {
-    pub drape_angle_deg: f64,
-    pub dangle: Vec<f64>,
-    /// the last solve's report, with the iterations and factorisations of every attempt
-    /// (a warm start given up on, the load ramp's steps)
-    pub report: SolveReport,
-}
+pub use rig::{BendPoint, BendRig};
 
 /// A cantilever's model and platform clamp (see [`CantileverBend::clamped`]).
 struct Clamped {
@@ -58,218 +26,6 @@ struct Clamped {
     clamp: EdgeClamp,
     edge: (usize, f64),
     tip: (usize, f64),
-}
-
-impl BendRig {
-    pub fn new(bend: &CantileverBend, material: &FabricMaterial) -> Result<Self, SceneError> {
-        let Clamped {
-            mut model,
-            fixed,
-            clamp,
-            edge,
-            tip,
-        } = bend.clamped(material)?;
-        let system = free_system(&model, &fixed, clamp.slaves)?;
-        model.set_gravity([0.0, 0.0, -STANDARD_GRAVITY]);
-        Ok(Self {
-            bend: bend.clone(),
-            model,
-            system,
-            equilibrium: None,
-            tangent: None,
-            material_params: material
-                .law
-                .params()
-                .into_iter()
-                .chain([material.thickness])
-                .collect(),
-            params: Vec::new(),
-            edge,
-            tip,
-        })
-    }
-
-    /// The current parameters: law, thickness, then the rigidities when the bending is its
-    /// own (the order of the sensitivities).
-    fn current_params(&self) -> Vec<f64> {
-        let mut k = self.material_params.clone();
-        if let Some(b) = self.model.bending() {
-            k.extend([b.warp, b.weft, b.twist]);
-        }
-        k
-    }
-
-    /// The warm start: the last equilibrium, moved along ∂q/∂k to the current parameters
-    /// where the last run left a tangent for as many parameters.
-    fn warm_start(&self) -> Option<Vec<Vec3>> {
-        let mut x = self.equilibrium.clone()?;
-        if let Some((k0, dq)) = &self.tangent {
-            if k0.len() == self.params.len() {
-                self.system.advance_along(&mut x, &self.params, k0, dq);
-            }
-        }
-        Some(x)
-    }
-
-    /// Replaces the law and the thickness (mesh, clamp and warm start stay).
-    pub fn set_material(
-        &mut self,
-        law: &crate::material::Orthotropic,
-        thickness: f64,
-    ) -> Result<(), SceneError> {
-        self.model.law = Arc::new(law.clone());
-        self.model.set_thickness(thickness)?;
-        self.material_params = law.params();
-        self.material_params.push(thickness);
-        Ok(())
-    }
-
-    /// Replaces the bending rigidities (`None`: the paper's section).
-    pub fn set_bending(&mut self, bending: Option<crate::material::BendingRigidity>) {
-        self.model.set_bending(bending);
-    }
-
-    pub fn run(&mut self, sensitivities: bool) -> Result<BendPoint, SceneError> {
-        self.params = self.current_params();
-        let start = self.warm_start();
-        let warm = start.is_some();
-        let mut x = start.unwrap_or_else(|| self.model.basis.control_points.clone());
-        // Newton iterations of a warm start given up on: counted in the report with the
-        // ramp's, so that the fitter's counts are of all the work done
-        let mut spent = 0;
-        let mut spent_factorizations = 0;
-        let full_step = self.bend.solver.strategy == Strategy::FullStep;
-        // a warm start that needs more than a few iterations is further off than the elastica
-        // (where there is none, the ramp from flat is dearer than letting the warm start run)
-        let warm_opts = NewtonOptions {
-            max_iterations: if full_step && elastica_applies(&self.model, &self.bend) {
-                self.bend.solver.max_iterations.min(WARM_ITERATIONS)
-            } else {
-                self.bend.solver.max_iterations
-            },
-            ..self.bend.solver
-        };
-        let solved = if warm {
-            match newton(&self.model, &self.system, &mut x, &warm_opts) {
-                Ok(r) => Some(r),
-                Err(e) => {
-                    if let SolveError::NotConverged {
-                        iterations,
-                        factorizations,
-                        ..
-                    } = e
-                    {
-                        spent = iterations;
-                        spent_factorizations = factorizations;
-                    }
-                    None
-                }
-            }
-        } else {
-            None
-        };
-        let mut from_elastica = (0, 0);
-        let solved = solved.or_else(|| {
-            if !full_step {
-                return None;
-            }
-            let (y, r) = solve_from_elastica(
-                &self.model,
-                &self.system,
-                &self.bend,
-                &self.bend.solver,
-                &mut from_elastica,
-            )?;
-            x = y;
-            Some(r)
-        });
-        spent += from_elastica.0;
-        spent_factorizations += from_elastica.1;
-        let mut report = match solved {
-            Some(r) => r,
-            None => {
-                x = self.model.basis.control_points.clone();
-                let apply = |m: &mut ShellModel, t: f64, _: &[Vec3]| {
-                    m.set_gravity([0.0, 0.0, -STANDARD_GRAVITY * t]);
-                };
-                let cont = continuation(
-                    &mut self.model,
-                    &self.system,
-                    &mut x,
-                    &self.bend.solver,
-                    1.0,
-                    apply,
-                )
-                .map_err(|(t, source)| SceneError::Solve {
-                    stage: format!("load factor {t:.4}"),
-                    source,
-                })?;
-                SolveReport {
-                    iterations: cont.iterations,
-                    factorizations: cont.factorizations,
-                    ..cont.last
-                }
-            }
-        };
-        report.iterations += spent;
-        report.factorizations += spent_factorizations;
-        let surface = self.model.basis.surface();
-        let stencil = |(face, u): (usize, f64), v: f64| {
-            surface
-                .stencil(face, u, v)
-                .map_err(|e| SceneError::Basis(e.into()))
-        };
-        let (se, st) = (stencil(self.edge, 0.0)?, stencil(self.tip, 1.0)?);
-        let (e, t) = (se.apply(&x).x(), st.apply(&x).x());
-        let (dy, dz) = (t[1] - e[1], -(t[2] - e[2]));
-        let angle = dz.atan2(dy).to_degrees();
-        let dangle = if sensitivities {
-            // ∂angle/∂x: through dy and dz at the tip (+) and the edge (−) point
-            let r2 = dy * dy + dz * dz;
-            let (ay, az) = (-dz / r2, dy / r2);
-            let mut c = vec![[0.0; 3]; x.len()];
-            for (s, sign) in [(&st, 1.0), (&se, -1.0)] {
-                for (&i, w) in s.indices.iter().zip(&s.weights) {
-                    c[i as usize][1] += sign * w[0] * ay;
-                    c[i as usize][2] -= sign * w[0] * az;
-                }
-            }
-            let fail = |source| SceneError::Solve {
-                stage: "drape-angle sensitivities".into(),
-                source,
-            };
-            let lin =
-                crate::solve::Linearization::new(&self.model, &self.system, &x).map_err(fail)?;
-            let lambda = lin.solve_reduced(&self.system, &c);
-            let sens = self
-                .model
-                .sensitivities(&x)
-                .map_err(|e| fail(SolveError::StartOutOfDomain(e.to_string())))?;
-            let mut dq = Vec::with_capacity(sens.gradient.len());
-            let dangle = sens
-                .gradient
-                .iter()
-                .map(|dg| {
-                    let reduced = self.system.reduced(dg);
-                    // ∂q/∂k, kept for the next run's start
-                    dq.push(lin.parameter_tangent(&self.system, dg));
-                    -lambda.iter().zip(&reduced).map(|(a, b)| a * b).sum::<f64>() * 180.0
-                        / std::f64::consts::PI
-                })
-                .collect();
-            self.tangent = (dq.len() == self.params.len()).then(|| (self.params.clone(), dq));
-            dangle
-        } else {
-            self.tangent = None;
-            Vec::new()
-        };
-        self.equilibrium = Some(x);
-        Ok(BendPoint {
-            drape_angle_deg: angle,
-            dangle,
-            report,
-        })
-    }
 }
 
 /// ASTM D1388 cantilever: a strip of `width` overhanging the platform edge by `overhang`, the
@@ -480,30 +236,11 @@ impl CantileverBend {
         cont.iterations += spent.0;
         cont.factorizations += spent.1;
         let stable_out_of_plane = if self.in_plane {
-            let mut fixed = vec![false; 3 * nn];
-            for &d in &clamp.fixed {
-                fixed[d] = true;
-            }
-            let full = free_system(&model, &fixed, clamp_slaves)?;
-            Some(
-                crate::solve::is_stable(&model, &full, &x).map_err(|source| SceneError::Solve {
-                    stage: "out-of-plane stability check".into(),
-                    source,
-                })?,
-            )
+            Some(stable_out_of_plane(&model, &clamp.fixed, clamp_slaves, &x)?)
         } else {
             None
         };
-        let surface = model.basis.surface();
-        let eval = |(face, u): (usize, f64), v: f64| -> Result<Vec3, SceneError> {
-            let s = surface
-                .stencil(face, u, v)
-                .map_err(|e| SceneError::Basis(e.into()))?;
-            Ok(s.apply(&x).x())
-        };
-        let edge = eval(edge, 0.0)?;
-        let tip = eval(tip, 1.0)?;
-        let angle = (-(tip[2] - edge[2])).atan2(tip[1] - edge[1]).to_degrees();
+        let (angle, tip) = drape_angle(&model, (edge, tip), &x)?;
         Ok(BendResult {
             drape_angle_deg: angle,
             tip,
@@ -514,6 +251,46 @@ impl CantileverBend {
             stable_out_of_plane,
         })
     }
+}
+
+/// Whether the in-plane equilibrium `x` is stable with the out-of-plane DOFs free too (only
+/// the clamp's `fixed` DOFs held, its `slaves` following).
+fn stable_out_of_plane(
+    model: &ShellModel,
+    clamp_fixed: &[usize],
+    slaves: Vec<Slave>,
+    x: &[Vec3],
+) -> Result<bool, SceneError> {
+    let nn = model.num_nodes();
+    let mut fixed = vec![false; 3 * nn];
+    for &d in clamp_fixed {
+        fixed[d] = true;
+    }
+    let full = free_system(model, &fixed, slaves)?;
+    crate::solve::is_stable(model, &full, x).map_err(|source| SceneError::Solve {
+        stage: "out-of-plane stability check".into(),
+        source,
+    })
+}
+
+/// The drape angle (degrees) between the limit points at the clamped edge (v = 0) and the tip
+/// (v = 1) of the strip at `x`, given as (face, u) each, and the tip's position.
+fn drape_angle(
+    model: &ShellModel,
+    (edge, tip): ((usize, f64), (usize, f64)),
+    x: &[Vec3],
+) -> Result<(f64, Vec3), SceneError> {
+    let surface = model.basis.surface();
+    let eval = |(face, u): (usize, f64), v: f64| -> Result<Vec3, SceneError> {
+        let s = surface
+            .stencil(face, u, v)
+            .map_err(|e| SceneError::Basis(e.into()))?;
+        Ok(s.apply(x).x())
+    };
+    let edge = eval(edge, 0.0)?;
+    let tip = eval(tip, 1.0)?;
+    let angle = (-(tip[2] - edge[2])).atan2(tip[1] - edge[1]).to_degrees();
+    Ok((angle, tip))
 }
 
 /// Iterations allowed to Newton from the elastica start; past them the load ramp takes over.
