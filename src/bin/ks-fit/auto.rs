@@ -4,15 +4,11 @@
 //! the values it was made from are said on stderr; where no mesh passes, or the values do not
 //! converge monotonically, the finest is kept with a WARNING.
 
-use crate::scene::{describe, SceneArgs};
+use crate::lab_args::{check_strip_size, describe, SceneArgs, BEND_TOL_DEG, TENSILE_TOL};
 use kshell::material::FabricMaterial;
 use kshell::scene::{TensilePoint, TensileStrip, STRIP_GRADING};
 use std::time::Instant;
 
-/// `bend`'s default tolerance, degrees of drape angle.
-pub const BEND_TOL_DEG: f64 = 0.05;
-/// `tensile`'s default tolerance, relative force error.
-pub const TENSILE_TOL: f64 = 0.003;
 /// Most meshes of the strip ladder (4, 8, 16, 32, 64 faces across for a 50 × 75 mm strip).
 pub const TENSILE_LEVELS: usize = 5;
 /// The strip ladder stops short of a mesh of more faces than this.
@@ -178,7 +174,7 @@ pub fn auto_ladder(
             ));
             break;
         }
-        crate::scene::check_strip_size("the automatic mesh", mesh, steps)?;
+        check_strip_size("the automatic mesh", mesh, steps)?;
         let t0 = Instant::now();
         // a finer mesh that fails ends the ladder; the first must solve
         let points = match run(mesh) {

@@ -9,6 +9,7 @@ mod fabric;
 mod fit;
 mod flags;
 mod guard;
+mod lab_args;
 mod mesh;
 mod models;
 mod recommend;
@@ -21,8 +22,9 @@ mod synth;
 use clap::{Parser, Subcommand};
 use fabric::cmd_check;
 use kshell::subdiv::BoundaryRule;
+use lab_args::SceneArgs;
 use mesh::{cmd_demo, cmd_mesh};
-use scene::{cmd_bend, cmd_converge, cmd_tensile, ConvergeScene, SceneArgs};
+use scene::{cmd_bend, cmd_converge, cmd_tensile, ConvergeScene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

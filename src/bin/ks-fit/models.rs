@@ -3,7 +3,7 @@
 //! table or from the shell law's zero-strain moduli (said on stderr).
 
 use crate::auto::auto_bend;
-use crate::scene::{describe, unstable_error, SceneArgs};
+use crate::lab_args::{describe, unstable_error, SceneArgs};
 use kshell::fit::tri::TriFit;
 use kshell::scene::{TriCantilever, TriTensile};
 use kshell::tri::file::{load_tri, TriSource};

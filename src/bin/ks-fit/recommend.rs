@@ -1,7 +1,7 @@
 //! `ks-fit recommend`: the cheapest cloth model and mesh whose error in one lab test is below a
 //! tolerance, with the table it chose from (`kshell::recommend`).
 
-use crate::scene::mm;
+use crate::lab_args::mm;
 use kshell::converge::{check_ladder, parse_ladder};
 use kshell::material::{load_material, FabricMaterial};
 use kshell::recommend::{compare_on, Comparison, LabTest};
@@ -136,7 +136,7 @@ fn sheet_test(a: &RecommendArgs) -> Result<LabTest, String> {
 /// The test `--scene` names, from the flags (and the shell's bending length for a cantilever
 /// without `--overhang`).
 fn lab_test(a: &RecommendArgs, shell: &FabricMaterial) -> Result<LabTest, String> {
-    let angle = crate::scene::angle_deg(a.angle)?;
+    let angle = crate::lab_args::angle_deg(a.angle)?;
     if a.scene == "tensile" {
         let width = mm("width", a.width.unwrap_or(50.0))?;
         let length = mm("length", a.length)?;
