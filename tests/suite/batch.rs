@@ -24,8 +24,8 @@ fn dataset(dir: &Path, name: &str) {
     assert_eq!(rc, 0, "{err}");
 }
 
-/// The library: two fabrics fitted fast (one mesh, degree 1), one whose dataset is missing,
-/// one whose fit refuses its options.
+/// The library: two fabrics fitted fast (one mesh for every test, degree 1), one whose
+/// dataset is missing, one whose fit refuses its options.
 fn library(dir: &Path) -> std::path::PathBuf {
     dataset(dir, "a");
     dataset(dir, "b");
@@ -33,11 +33,11 @@ fn library(dir: &Path) -> std::path::PathBuf {
     std::fs::write(
         &manifest,
         "# two fabrics and two that cannot be fitted\n\
-         fabric,dataset,max_degree,mesh_ladder\n\
-         cotton-a,a/fabric.toml,1,4x6\n\
-         cotton-b,b/fabric.toml,1,4x6\n\
-         missing,nothere/fabric.toml,,\n\
-         refused,a/fabric.toml,0,4x6\n",
+         fabric,dataset,max_degree,mesh_ladder,test_meshes\n\
+         cotton-a,a/fabric.toml,1,4x6,ladder\n\
+         cotton-b,b/fabric.toml,1,4x6,ladder\n\
+         missing,nothere/fabric.toml,,,\n\
+         refused,a/fabric.toml,0,4x6,ladder\n",
     )
     .unwrap();
     manifest
