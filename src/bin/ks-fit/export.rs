@@ -5,6 +5,25 @@ use crate::guard::Guard;
 use kshell::material::arcsim::{export, stress_deviation, ArcsimMaterial};
 use kshell::material::load_material;
 use std::path::Path;
+use std::path::PathBuf;
+
+/// The flags of `ks-fit export`.
+#[derive(clap::Args)]
+pub struct ExportArgs {
+    /// Material file (TOML).
+    #[arg(long)]
+    pub material: PathBuf,
+    /// Output format: arcsim.
+    #[arg(long)]
+    pub format: Format,
+    /// Output file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Engineering strain up to which the format's stiffness ramps are fitted to the law
+    /// (the range the material was measured over; at most 1/6, where ARCSim's ramp ends).
+    #[arg(long, default_value_t = 0.08)]
+    pub max_strain: f64,
+}
 
 /// Formats `ks-fit export` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

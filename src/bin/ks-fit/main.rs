@@ -21,11 +21,8 @@ mod synth;
 
 use clap::{Parser, Subcommand};
 use fabric::cmd_check;
-use kshell::subdiv::BoundaryRule;
-use lab_args::SceneArgs;
 use mesh::{cmd_demo, cmd_mesh};
 use scene::{cmd_bend, cmd_converge, cmd_tensile, ConvergeScene};
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -49,63 +46,11 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Summarise a quad control mesh (OBJ), or evaluate its Catmull–Clark limit surface.
-    Mesh {
-        /// Wavefront OBJ file.
-        file: PathBuf,
-        /// Print the limit position and its first and second derivatives at one point as CSV.
-        /// FACE is the 0-based face index in the file; u runs from the face's first vertex
-        /// towards its second, v from its first towards its last, both in [0, 1].
-        #[arg(long, num_args = 3, value_names = ["FACE", "U", "V"], allow_negative_numbers = true)]
-        limit: Option<Vec<String>>,
-        #[arg(long, default_value = "phantom", help = flags::boundary_help(""))]
-        boundary: BoundaryRule,
-        /// Apply N uniform Catmull–Clark steps first, ahead of anything else.
-        #[arg(long, default_value_t = 0)]
-        subdivide: usize,
-        /// Write the (possibly refined) mesh to this OBJ file.
-        #[arg(long)]
-        write: Option<PathBuf>,
-    },
+    Mesh(mesh::MeshArgs),
     /// Virtual ASTM D5035 strip test: prints CSV `elongation_mm,force_n`.
-    Tensile {
-        /// Material file (TOML).
-        #[arg(long)]
-        material: PathBuf,
-        /// Cut angle from the weft, degrees (0 weft, 90 warp, 45 bias).
-        #[arg(long, allow_negative_numbers = true)]
-        angle: f64,
-        /// Strip width, mm.
-        #[arg(long, allow_negative_numbers = true)]
-        width: f64,
-        /// Gauge length, mm.
-        #[arg(long, allow_negative_numbers = true)]
-        length: f64,
-        /// Final elongation, mm.
-        #[arg(long, allow_negative_numbers = true)]
-        to: f64,
-        /// Number of equal elongation steps (rows printed).
-        #[arg(long)]
-        steps: usize,
-        #[command(flatten)]
-        solve: SceneArgs,
-    },
+    Tensile(scene::TensileArgs),
     /// Virtual ASTM D1388 cantilever: prints CSV `overhang_mm,drape_angle_deg`.
-    Bend {
-        /// Material file (TOML).
-        #[arg(long)]
-        material: PathBuf,
-        /// Cut angle from the weft, degrees.
-        #[arg(long, allow_negative_numbers = true)]
-        angle: f64,
-        /// Overhang past the platform edge, mm.
-        #[arg(long, allow_negative_numbers = true)]
-        overhang: f64,
-        /// Strip width, mm.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
-        width: f64,
-        #[command(flatten)]
-        solve: SceneArgs,
-    },
+    Bend(scene::BendArgs),
     /// Mesh-refinement study of a virtual test: table of QoI, Richardson estimate, observed
     /// order; optionally the coarsest mesh meeting a tolerance, CSV and an SVG chart.
     Converge {
@@ -130,37 +75,11 @@ enum Command {
     /// driver such as Mesa's lavapipe will do): the cloth with its warp (red) and weft (blue)
     /// lines where the file has texture coordinates in metres of fabric, lit from above.
     /// Several shapes are drawn side by side at one scale, --image each.
-    Render {
-        /// Wavefront OBJ shape(s).
-        #[arg(required = true)]
-        files: Vec<PathBuf>,
-        /// Shapes per row when there are several (default: up to 5).
-        #[arg(long)]
-        columns: Option<usize>,
-        /// PNG file to write.
-        #[arg(long)]
-        out: PathBuf,
-        #[command(flatten)]
-        image: render::ImageArgs,
-    },
+    Render(render::RenderArgs),
     /// Write a material in another simulator's format: `arcsim` (the JSON material of Wang et
     /// al. 2011 that ARCSim reads; warp on u, weft on v). Prints how closely the format
     /// reproduces the law's stress on uniaxial stretches up to --max-strain.
-    Export {
-        /// Material file (TOML).
-        #[arg(long)]
-        material: PathBuf,
-        /// Output format: arcsim.
-        #[arg(long)]
-        format: export::Format,
-        /// Output file.
-        #[arg(long)]
-        out: PathBuf,
-        /// Engineering strain up to which the format's stiffness ramps are fitted to the law
-        /// (the range the material was measured over; at most 1/6, where ARCSim's ramp ends).
-        #[arg(long, default_value_t = 0.08)]
-        max_strain: f64,
-    },
+    Export(export::ExportArgs),
     /// Run the built-in demonstration: the limit basis on the bundled sample shapes, then
     /// virtual tensile and cantilever tests of the example material.
     Demo,
@@ -221,51 +140,36 @@ fn parse_mesh(s: &str) -> Result<(usize, usize), String> {
 /// Runs one command; `Ok(false)` when it ran but failed its check (exit code 3).
 fn run(command: Command, force: bool) -> Result<bool, String> {
     match command {
-        Command::Mesh {
-            file,
-            limit,
-            boundary,
-            subdivide,
-            write,
-        } => cmd_mesh(
-            &file,
-            limit.as_deref(),
-            boundary,
-            subdivide,
-            write.as_deref(),
+        Command::Mesh(a) => cmd_mesh(
+            &a.file,
+            a.limit.as_deref(),
+            a.boundary,
+            a.subdivide,
+            a.write.as_deref(),
             force,
         )
         .map(|()| true),
-        Command::Tensile {
-            material,
-            angle,
-            width,
-            length,
-            to,
-            steps,
-            solve,
-        } => cmd_tensile(&material, angle, width, length, to, steps, &solve).map(|()| true),
-        Command::Bend {
-            material,
-            angle,
-            overhang,
-            width,
-            solve,
-        } => cmd_bend(&material, angle, overhang, width, &solve).map(|()| true),
+        Command::Tensile(a) => cmd_tensile(
+            &a.material,
+            a.angle,
+            a.width,
+            a.length,
+            a.to,
+            a.steps,
+            &a.solve,
+        )
+        .map(|()| true),
+        Command::Bend(a) => {
+            cmd_bend(&a.material, a.angle, a.overhang, a.width, &a.solve).map(|()| true)
+        }
         Command::Converge { scene } => cmd_converge(scene, force).map(|()| true),
         Command::Scene { scene } => sheets::cmd_scene(scene, force).map(|()| true),
-        Command::Export {
-            material,
-            format,
-            out,
-            max_strain,
-        } => export::cmd_export(&material, format, &out, max_strain, force).map(|()| true),
-        Command::Render {
-            files,
-            out,
-            columns,
-            image,
-        } => render::cmd_render(&files, &out, columns, &image, force).map(|()| true),
+        Command::Export(a) => {
+            export::cmd_export(&a.material, a.format, &a.out, a.max_strain, force).map(|()| true)
+        }
+        Command::Render(a) => {
+            render::cmd_render(&a.files, &a.out, a.columns, &a.image, force).map(|()| true)
+        }
         Command::Recommend { args } => recommend::cmd_recommend(&args),
         Command::Demo => cmd_demo().map(|()| true),
         Command::Check(args) => cmd_check(&args).map(|()| true),

@@ -4,7 +4,28 @@ use kshell::mesh::{read_obj, shapes, write_obj, PolyMesh, Topology};
 use kshell::scene::{CantileverBend, TensileStrip};
 use kshell::subdiv::{refine_uniform, BoundaryRule, FaceKind, LimitBasis, LimitSurface};
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 use std::time::Instant;
+
+/// The flags of `ks-fit mesh`.
+#[derive(clap::Args)]
+pub struct MeshArgs {
+    /// Wavefront OBJ file.
+    pub file: PathBuf,
+    /// Print the limit position and its first and second derivatives at one point as CSV.
+    /// FACE is the 0-based face index in the file; u runs from the face's first vertex
+    /// towards its second, v from its first towards its last, both in [0, 1].
+    #[arg(long, num_args = 3, value_names = ["FACE", "U", "V"], allow_negative_numbers = true)]
+    pub limit: Option<Vec<String>>,
+    #[arg(long, default_value = "phantom", help = crate::flags::boundary_help(""))]
+    pub boundary: BoundaryRule,
+    /// Apply N uniform Catmull–Clark steps first, ahead of anything else.
+    #[arg(long, default_value_t = 0)]
+    pub subdivide: usize,
+    /// Write the (possibly refined) mesh to this OBJ file.
+    #[arg(long)]
+    pub write: Option<PathBuf>,
+}
 
 fn refine(mesh: &PolyMesh) -> PolyMesh {
     // the mesh is checked when it is read; refinement keeps it manifold

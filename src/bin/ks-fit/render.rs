@@ -7,6 +7,22 @@ use kshell::render::{
 };
 use std::path::{Path, PathBuf};
 
+/// The flags of `ks-fit render`.
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Wavefront OBJ shape(s).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Shapes per row when there are several (default: up to 5).
+    #[arg(long)]
+    pub columns: Option<usize>,
+    /// PNG file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub image: ImageArgs,
+}
+
 /// Picture options shared by every command that draws.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ImageArgs {

@@ -16,6 +16,50 @@ use kshell::subdiv::BoundaryRule;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// The flags of `ks-fit bend`.
+#[derive(clap::Args)]
+pub struct BendArgs {
+    /// Material file (TOML).
+    #[arg(long)]
+    pub material: PathBuf,
+    /// Cut angle from the weft, degrees.
+    #[arg(long, allow_negative_numbers = true)]
+    pub angle: f64,
+    /// Overhang past the platform edge, mm.
+    #[arg(long, allow_negative_numbers = true)]
+    pub overhang: f64,
+    /// Strip width, mm.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 25.0)]
+    pub width: f64,
+    #[command(flatten)]
+    pub solve: SceneArgs,
+}
+
+/// The flags of `ks-fit tensile`.
+#[derive(clap::Args)]
+pub struct TensileArgs {
+    /// Material file (TOML).
+    #[arg(long)]
+    pub material: PathBuf,
+    /// Cut angle from the weft, degrees (0 weft, 90 warp, 45 bias).
+    #[arg(long, allow_negative_numbers = true)]
+    pub angle: f64,
+    /// Strip width, mm.
+    #[arg(long, allow_negative_numbers = true)]
+    pub width: f64,
+    /// Gauge length, mm.
+    #[arg(long, allow_negative_numbers = true)]
+    pub length: f64,
+    /// Final elongation, mm.
+    #[arg(long, allow_negative_numbers = true)]
+    pub to: f64,
+    /// Number of equal elongation steps (rows printed).
+    #[arg(long)]
+    pub steps: usize,
+    #[command(flatten)]
+    pub solve: SceneArgs,
+}
+
 #[derive(Subcommand)]
 pub enum ConvergeScene {
     /// QoI: the clamp force at the given elongation.
