@@ -1,7 +1,8 @@
 //! Cantilevers against exact elastica solutions: the heavy (self-weight) cantilever of the ASTM
 //! D1388 bend test and Sze, Liu & Lo's tip-force cantilever.
 
-use kshell::material::{FabricMaterial, OrthotropicStvk};
+use crate::common::TestLaw;
+use kshell::material::FabricMaterial;
 use kshell::scene::CantileverBend;
 use kshell::subdiv::BoundaryRule;
 
@@ -13,19 +14,11 @@ const HEAVY_ELASTICA_ANGLE: f64 = 41.4873;
 /// An isotropic-in-bending strip of τ = 0.2 mm and 100 g/m²; a12 = 0 so that it bends like a
 /// beam: D = a11 τ³ / 12 per unit width.
 fn elastica(a11: f64, g12: f64) -> FabricMaterial {
-    FabricMaterial {
-        name: "elastica".into(),
-        areal_density: 0.1,
-        thickness: 2.0e-4,
-        law: OrthotropicStvk {
-            a11,
-            a22: a11,
-            a12: 0.0,
-            g12,
-        }
-        .into(),
-        bending: None,
-    }
+    TestLaw::stvk(a11, a11, 0.0, g12)
+        .named("elastica")
+        .density(0.1)
+        .thickness(2.0e-4)
+        .material()
 }
 
 fn heavy_case(mesh: (usize, usize), rule: BoundaryRule) -> f64 {
@@ -118,13 +111,11 @@ fn phantom_clamp_pins_the_edge_curvature_and_converges_slowly() {
 const SZE_31_TIP: (f64, f64) = (3.2894, 6.6996);
 
 fn sze_tip_force(mesh: (usize, usize)) -> (f64, f64) {
-    let m = FabricMaterial {
-        name: "sze".into(),
-        areal_density: 1.0,
-        thickness: 0.1,
-        law: OrthotropicStvk::isotropic(1.2e6, 0.0).into(),
-        bending: None,
-    };
+    let m = TestLaw::isotropic(1.2e6, 0.0)
+        .named("sze")
+        .density(1.0)
+        .thickness(0.1)
+        .material();
     let mut bend = CantileverBend::new(1.0, 10.0, 90.0);
     bend.mesh = mesh;
     bend.gravity = false;
@@ -158,13 +149,11 @@ fn tip_force_cantilever_matches_the_exact_elastica() {
 /// M_max = 2π EI / L = 50π/3). Exact inextensible tip: −u = L (1 − sin θ / θ),
 /// w = L (1 − cos θ) / θ.
 fn sze_rollup(mesh: (usize, usize), frac: f64, in_plane: bool) -> (f64, f64, Option<bool>) {
-    let m = FabricMaterial {
-        name: "sze32".into(),
-        areal_density: 1.0,
-        thickness: 0.1,
-        law: OrthotropicStvk::isotropic(1.2e6, 0.0).into(),
-        bending: None,
-    };
+    let m = TestLaw::isotropic(1.2e6, 0.0)
+        .named("sze32")
+        .density(1.0)
+        .thickness(0.1)
+        .material();
     let (l, ei) = (12.0, 1.2e6 * 0.1f64.powi(3) / 12.0);
     let mut bend = CantileverBend::new(1.0, l, 90.0);
     bend.mesh = mesh;

@@ -1,7 +1,7 @@
 //! End-to-end tests of the `ks-fit` command line: outputs users and scripts rely on, and errors
 //! that name the file and line and exit with code 2.
 
-use crate::common::{first_value, ks_fit};
+use crate::common::{first_value, ks_fit, TestLaw};
 
 fn temp_file(name: &str, text: &str) -> String {
     let dir = std::env::temp_dir().join(format!("kshell-cli-{}", std::process::id()));
@@ -146,9 +146,7 @@ fn demo_runs_and_checks_the_strip_area() {
 fn material_file(name: &str, extra: &str) -> String {
     temp_file(
         name,
-        &format!(
-            "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\na12_pa = 0\ng12_pa = 2e6\n{extra}"
-        ),
+        &(TestLaw::stvk(1e8, 6e7, 0.0, 2e6).named("t").toml() + extra),
     )
 }
 
@@ -269,7 +267,7 @@ fn scene_commands_reject_bad_input_with_exit_code_2() {
 fn converge_prints_a_table_and_writes_csv_and_svg() {
     let m = temp_file(
         "converge.toml",
-        "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\ng12_pa = 2e6\n",
+        &TestLaw::stvk(1e8, 6e7, 3e7, 2e6).named("t").toml(),
     );
     let dir = std::env::temp_dir().join(format!("kshell-conv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -377,11 +375,8 @@ fn tensile_at_tiny_elongations_ends_at_the_round_off_floor() {
 /// a12 may be negative (a negative Poisson coupling): the only bound is a12² < a11·a22.
 #[test]
 fn negative_a12_is_a_legal_material() {
-    let m = material_file("negative-a12.toml", "");
-    let text = std::fs::read_to_string(&m)
-        .unwrap()
-        .replace("a12_pa = 0", "a12_pa = -2e7");
-    std::fs::write(&m, text).unwrap();
+    let law = TestLaw::stvk(1e8, 6e7, -2e7, 2e6).named("t");
+    let m = temp_file("negative-a12.toml", &law.toml());
     let (rc, out, err) = ks_fit(&[
         "tensile",
         "--material",
@@ -400,10 +395,9 @@ fn negative_a12_is_a_legal_material() {
         "4x6",
     ]);
     assert_eq!(rc, 0, "{out}{err}");
-    let text = std::fs::read_to_string(&m)
-        .unwrap()
-        .replace("a12_pa = -2e7", "a12_pa = -8e7");
-    std::fs::write(&m, text).unwrap();
+    // a12² = 6.4e15 > a11·a22 = 6e15
+    let too_negative = TestLaw::stvk(1e8, 6e7, -8e7, 2e6).named("t");
+    std::fs::write(&m, too_negative.toml()).unwrap();
     let (rc, _, err) = ks_fit(&[
         "tensile",
         "--material",

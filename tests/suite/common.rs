@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use kshell::material::{Cutoffs, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};
+
 /// The second column of the first data row of a CSV that `ks-fit` printed (a strip's force,
 /// a cantilever's drape angle).
 pub fn first_value(out: &str) -> f64 {
@@ -198,4 +200,142 @@ pub fn tensile_error_at(doc: &toml::Table, angle: f64) -> f64 {
         .find(|t| t["kind"].as_str() == Some("tensile") && t["angle_deg"].as_float() == Some(angle))
         .and_then(|t| t["avg_rel_error"].as_float())
         .unwrap_or_else(|| panic!("no tensile test at {angle}°"))
+}
+
+/// One builder for the suite's hand-written laws. It starts from the orthotropic St. Venant–
+/// Kirchhoff law (every η linear, no cut-offs, no coupling) on a 100 g/m², 0.2 mm fabric named
+/// "test", and a test adds the η terms, cut-offs, density and thickness it is about. The same
+/// law comes out as the library's types ([`TestLaw::material`], [`TestLaw::law`]) or as a
+/// material file ([`TestLaw::toml`]) for the CLI.
+#[derive(Clone, Debug)]
+pub struct TestLaw {
+    pub name: String,
+    /// kg/m²
+    pub areal_density: f64,
+    /// m
+    pub thickness: f64,
+    pub law: Orthotropic,
+}
+
+impl TestLaw {
+    /// The orthotropic St. Venant–Kirchhoff law with these moduli (Pa).
+    pub fn stvk(a11: f64, a22: f64, a12: f64, g12: f64) -> Self {
+        let law = OrthotropicStvk { a11, a22, a12, g12 };
+        Self {
+            name: "test".into(),
+            areal_density: 0.1,
+            thickness: 2.0e-4,
+            law: law.into(),
+        }
+    }
+
+    /// The isotropic St. Venant–Kirchhoff law of Young's modulus `e` (Pa) and Poisson ratio `nu`.
+    pub fn isotropic(e: f64, nu: f64) -> Self {
+        let s = OrthotropicStvk::isotropic(e, nu);
+        Self::stvk(s.a11, s.a22, s.a12, s.g12)
+    }
+
+    pub fn named(mut self, name: &str) -> Self {
+        self.name = name.into();
+        self
+    }
+
+    /// Areal density in kg/m².
+    pub fn density(mut self, kg_m2: f64) -> Self {
+        self.areal_density = kg_m2;
+        self
+    }
+
+    /// Thickness in m.
+    pub fn thickness(mut self, m: f64) -> Self {
+        self.thickness = m;
+        self
+    }
+
+    /// η1 = Σ μ/α ((x+1)^α − 1) (Clyde et al. 2017, Eq. 2).
+    pub fn warp(mut self, mu: &[f64], alpha: &[f64]) -> Self {
+        self.law.warp = eta(mu, alpha);
+        self
+    }
+
+    /// η3, as [`TestLaw::warp`].
+    pub fn weft(mut self, mu: &[f64], alpha: &[f64]) -> Self {
+        self.law.weft = eta(mu, alpha);
+        self
+    }
+
+    /// η4, as [`TestLaw::warp`].
+    pub fn shear(mut self, mu: &[f64], alpha: &[f64]) -> Self {
+        self.law.shear = eta(mu, alpha);
+        self
+    }
+
+    /// Green-strain cut-offs in the warp/weft frame, each (min, max).
+    pub fn cutoffs(mut self, e11: (f64, f64), e22: (f64, f64), e12: (f64, f64)) -> Self {
+        self.law.cutoffs = Cutoffs { e11, e22, e12 };
+        self
+    }
+
+    /// The paper's fabric: bending from the law integrated through the thickness.
+    pub fn material(&self) -> FabricMaterial {
+        FabricMaterial::paper(
+            &self.name,
+            self.areal_density,
+            self.thickness,
+            self.law.clone(),
+        )
+    }
+
+    /// The law alone.
+    pub fn law(&self) -> Orthotropic {
+        self.law.clone()
+    }
+
+    /// The moduli as a St. Venant–Kirchhoff law (the η terms left out).
+    pub fn stvk_law(&self) -> OrthotropicStvk {
+        let l = &self.law;
+        OrthotropicStvk {
+            a11: l.a11,
+            a22: l.a22,
+            a12: l.a12,
+            g12: l.g12,
+        }
+    }
+
+    /// The law as a material file (docs/material-format.md); cut-offs and coupling are not
+    /// written.
+    pub fn toml(&self) -> String {
+        let l = &self.law;
+        let mut text = format!(
+            "name = \"{}\"\nareal_density_g_m2 = {}\nthickness_mm = {}\na11_pa = {:e}\na22_pa = {:e}\na12_pa = {:e}\ng12_pa = {:e}\n",
+            self.name,
+            short(self.areal_density * 1e3),
+            short(self.thickness * 1e3),
+            l.a11,
+            l.a22,
+            l.a12,
+            l.g12
+        );
+        for (table, e) in [("warp", &l.warp), ("weft", &l.weft), ("shear", &l.shear)] {
+            if *e != Eta::linear() {
+                text += &format!("[{table}]\nmu = {:?}\nalpha = {:?}\n", e.mu, e.alpha);
+            }
+        }
+        text
+    }
+}
+
+/// `x` to 12 significant digits, as short as Rust writes it: the unit conversion's last-digit
+/// noise (0.3e-3 · 1e3 = 0.30000000000000004) stays out of the file.
+fn short(x: f64) -> String {
+    let rounded: f64 = format!("{x:.11e}").parse().unwrap();
+    format!("{rounded}")
+}
+
+fn eta(mu: &[f64], alpha: &[f64]) -> Eta {
+    assert_eq!(mu.len(), alpha.len(), "one α for every μ");
+    Eta {
+        mu: mu.to_vec(),
+        alpha: alpha.to_vec(),
+    }
 }

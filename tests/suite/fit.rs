@@ -3,7 +3,7 @@
 //! issue's acceptance numbers), the output loads as a material and carries its `[fit]` table,
 //! and datasets the fit cannot use are refused with exit code 2.
 
-use crate::common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s, TestLaw};
 
 /// The `[fit]` table's notes.
 fn notes_of(fit: &toml::Table) -> Vec<&str> {
@@ -599,8 +599,12 @@ fn the_ladder_refines_only_what_the_refit_check_says_changes() {
 #[test]
 fn each_test_is_refined_on_its_own_mesh_until_its_error_estimate_passes() {
     let dir = folder("fit-own-meshes");
-    let truth = "name = \"stiff-yarns\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 1.0e9\na22_pa = 3.0e8\ng12_pa = 1.0e6\n";
-    let data = synth_with(&dir, truth, "5", "32x48", &["--yarn-rule", "full"]);
+    let truth = TestLaw::stvk(1.0e9, 3.0e8, 1.5e8, 1.0e6)
+        .named("stiff-yarns")
+        .density(0.25)
+        .thickness(3.0e-4)
+        .toml();
+    let data = synth_with(&dir, &truth, "5", "32x48", &["--yarn-rule", "full"]);
     let fabric = data.join("fabric.toml");
     let text = std::fs::read_to_string(&fabric).unwrap();
     assert!(text.contains("thickness_mm = 0.3\n"), "{text}");

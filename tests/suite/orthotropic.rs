@@ -1,30 +1,23 @@
 //! The paper's orthotropic law in the virtual lab: symmetries of the strip test and a
 //! stiffening bias strip pulled to 30 %.
 
-use kshell::material::{parse_material, FabricMaterial};
+use crate::common::TestLaw;
+use kshell::material::FabricMaterial;
 use kshell::scene::{TensilePoint, TensileStrip};
 
-const STIFFENING: &str = r#"
-name = "stiffening"
-areal_density_g_m2 = 150
-thickness_mm = 0.2
-a11_pa = 1.0e8
-a22_pa = 6.0e7
-a12_pa = 1.0e7
-g12_pa = 1.5e6
-[warp]
-mu = [0.6, 0.3, 0.1]
-alpha = [1.0, 6.0, 14.0]
-[weft]
-mu = [0.5, 0.4, 0.1]
-alpha = [1.0, 5.0, 12.0]
-[shear]
-mu = [0.7, 0.2, 0.1]
-alpha = [1.0, 4.0, 10.0]
-"#;
+/// A degree-3 law stiffening in warp, weft and shear.
+fn stiffening() -> TestLaw {
+    TestLaw::stvk(1.0e8, 6.0e7, 1.0e7, 1.5e6)
+        .named("stiffening")
+        .density(0.15)
+        .thickness(2.0e-4)
+        .warp(&[0.6, 0.3, 0.1], &[1.0, 6.0, 14.0])
+        .weft(&[0.5, 0.4, 0.1], &[1.0, 5.0, 12.0])
+        .shear(&[0.7, 0.2, 0.1], &[1.0, 4.0, 10.0])
+}
 
 fn material() -> FabricMaterial {
-    parse_material(STIFFENING, "stiffening.toml").unwrap()
+    stiffening().material()
 }
 
 fn points(angle: f64, dl: &[f64]) -> Vec<TensilePoint> {
@@ -87,7 +80,7 @@ fn stiffening_bias_strip_reaches_30_percent_with_rising_force() {
     let dir = std::env::temp_dir().join(format!("kshell-ortho-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("stiffening.toml");
-    std::fs::write(&path, STIFFENING).unwrap();
+    std::fs::write(&path, stiffening().toml()).unwrap();
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ks-fit"))
         .args([
             "tensile",

@@ -1,7 +1,7 @@
 //! `ks-fit scene` and `ks-fit export`: the outputs users load elsewhere (OBJ, PLY, CSV,
 //! scene.toml, ARCSim JSON) and the automatic mesh choice, driven through the binary.
 
-use crate::common::{first_value, folder, ks_fit, s};
+use crate::common::{first_value, folder, ks_fit, s, TestLaw};
 
 const COTTON: &str = "examples/materials/cotton.toml";
 
@@ -241,11 +241,8 @@ fn export_writes_an_arcsim_file_reads_it_back_and_reports_the_deviation() {
 fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
     let dir = folder("bend-auto");
     let m = dir.join("heavy.toml");
-    std::fs::write(
-        &m,
-        "name = \"heavy\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 2e7\na22_pa = 2e7\na12_pa = 0\ng12_pa = 1e7\n",
-    )
-    .unwrap();
+    let heavy = TestLaw::stvk(2e7, 2e7, 0.0, 1e7).named("heavy");
+    std::fs::write(&m, heavy.toml()).unwrap();
     let args = [
         "bend",
         "--material",
@@ -285,11 +282,9 @@ fn bend_picks_a_mesh_that_meets_the_angle_tolerance() {
 fn a_frame_past_the_materials_shear_cut_off_is_warned_about() {
     let dir = folder("frame-cutoff");
     let m = dir.join("m.toml");
-    std::fs::write(
-        &m,
-        "name = \"t\"\nareal_density_g_m2 = 100\nthickness_mm = 0.2\na11_pa = 1e8\na22_pa = 6e7\na12_pa = 0\ng12_pa = 2e6\n[cutoffs]\ne11_max = 0.1\ne22_max = 0.1\ne12_max = 0.1\n",
-    )
-    .unwrap();
+    let law = TestLaw::stvk(1e8, 6e7, 0.0, 2e6).named("t").toml();
+    let cutoffs = "[cutoffs]\ne11_max = 0.1\ne22_max = 0.1\ne12_max = 0.1\n";
+    std::fs::write(&m, law + cutoffs).unwrap();
     let run = |deg: &str| {
         let out = dir.join(format!("f{deg}"));
         let (rc, _, err) = ks_fit(&[

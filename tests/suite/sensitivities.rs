@@ -1,36 +1,19 @@
 //! Exact force and drape-angle sensitivities through the equilibrium (Clyde et al. 2017, Eq. 6)
 //! against central differences of full equilibrium solves.
 
-use kshell::material::{Cutoffs, Eta, FabricMaterial, Orthotropic};
+use crate::common::TestLaw;
+use kshell::material::FabricMaterial;
 use kshell::scene::TensileStrip;
 
 fn material() -> FabricMaterial {
-    FabricMaterial {
-        name: "degree-2".into(),
-        areal_density: 0.1,
-        thickness: 3.0e-4,
-        law: Orthotropic {
-            a11: 2.0e8,
-            a22: 1.2e8,
-            a12: 0.6e8,
-            g12: 4.0e6,
-            warp: Eta {
-                mu: vec![0.6, 0.4],
-                alpha: vec![1.0, 300.0],
-            },
-            weft: Eta {
-                mu: vec![0.8, 0.2],
-                alpha: vec![2.0, 150.0],
-            },
-            shear: Eta {
-                mu: vec![0.7, 0.3],
-                alpha: vec![1.0, 40.0],
-            },
-            cutoffs: Cutoffs::none(),
-            coupling: None,
-        },
-        bending: None,
-    }
+    TestLaw::stvk(2.0e8, 1.2e8, 0.6e8, 4.0e6)
+        .named("degree-2")
+        .density(0.1)
+        .thickness(3.0e-4)
+        .warp(&[0.6, 0.4], &[1.0, 300.0])
+        .weft(&[0.8, 0.2], &[2.0, 150.0])
+        .shear(&[0.7, 0.3], &[1.0, 40.0])
+        .material()
 }
 
 fn forces(

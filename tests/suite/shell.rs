@@ -1,7 +1,8 @@
 //! The shell engine against finite differences, rigid motions and closed-form strips.
 
+use crate::common::TestLaw;
 use kshell::assembly::{BlockMatrix, ShellModel, Want, YarnRule};
-use kshell::material::{FabricMaterial, OrthotropicStvk};
+use kshell::material::OrthotropicStvk;
 use kshell::mesh::{rectangular_grid, shapes, PolyMesh};
 use kshell::scene::TensileStrip;
 use kshell::subdiv::{BasisOptions, BoundaryRule, FaceKind, LimitBasis};
@@ -19,12 +20,7 @@ impl Rng {
 }
 
 fn law() -> OrthotropicStvk {
-    OrthotropicStvk {
-        a11: 2.0e7,
-        a22: 1.2e7,
-        a12: 3.0e6,
-        g12: 1.5e6,
-    }
+    TestLaw::stvk(2.0e7, 1.2e7, 3.0e6, 1.5e6).stvk_law()
 }
 
 fn model_for(mesh: &PolyMesh, rule: BoundaryRule, tau: f64) -> ShellModel {
@@ -185,16 +181,6 @@ fn rigid_motions_of_a_curved_rest_shape_cost_nothing() {
     }
 }
 
-fn fabric(law: OrthotropicStvk, tau: f64) -> FabricMaterial {
-    FabricMaterial {
-        name: "test".into(),
-        areal_density: 0.1,
-        thickness: tau,
-        law: law.into(),
-        bending: None,
-    }
-}
-
 #[test]
 fn uniaxial_svk_strip_matches_the_closed_form() {
     // With a12 = 0 there is no Poisson coupling: a strip pulled along the warp (or weft) is in
@@ -202,15 +188,9 @@ fn uniaxial_svk_strip_matches_the_closed_form() {
     let tau = 3e-4;
     let (w, l) = (0.05, 0.075);
     for (angle, a) in [(90.0, 2.0e7), (0.0, 1.2e7)] {
-        let m = fabric(
-            OrthotropicStvk {
-                a11: 2.0e7,
-                a22: 1.2e7,
-                a12: 0.0,
-                g12: 1.0e6,
-            },
-            tau,
-        );
+        let m = TestLaw::stvk(2.0e7, 1.2e7, 0.0, 1.0e6)
+            .thickness(tau)
+            .material();
         for (mesh, rule) in [
             ((2, 3), BoundaryRule::Phantom),
             ((8, 12), BoundaryRule::Phantom),
@@ -241,15 +221,7 @@ fn isotropic_material_gives_the_same_curve_at_every_angle() {
     // isotropy here: a11 = a22 and G12 = a11 − a12
     for a12 in [0.0, 4.0e6] {
         let a11 = 1.5e7;
-        let m = fabric(
-            OrthotropicStvk {
-                a11,
-                a22: a11,
-                a12,
-                g12: a11 - a12,
-            },
-            2e-4,
-        );
+        let m = TestLaw::stvk(a11, a11, a12, a11 - a12).material();
         let dl = [0.0015, 0.004, 0.0075];
         let reference = TensileStrip::new(0.05, 0.075, 0.0).run(&m, &dl).unwrap();
         for angle in [22.5, 45.0, 90.0] {
@@ -268,32 +240,13 @@ fn isotropic_material_gives_the_same_curve_at_every_angle() {
 
 #[test]
 fn parameter_and_thickness_sensitivities_match_differences() {
-    use kshell::material::{Cutoffs, Eta, Orthotropic};
-    let law = Orthotropic {
-        a11: 2.0e7,
-        a22: 1.2e7,
-        a12: 3.0e6,
-        g12: 1.5e6,
-        warp: Eta {
-            mu: vec![0.6, 0.4],
-            alpha: vec![1.0, 8.0],
-        },
-        weft: Eta {
-            mu: vec![1.0],
-            alpha: vec![3.0],
-        },
-        shear: Eta {
-            mu: vec![1.5, -0.5],
-            alpha: vec![2.0, -2.0],
-        },
-        // tight enough that some Gauss points lie outside the box
-        cutoffs: Cutoffs {
-            e11: (0.0, 0.02),
-            e22: (0.0, 0.03),
-            e12: (-0.02, 0.02),
-        },
-        coupling: None,
-    };
+    // cut-offs tight enough that some Gauss points lie outside the box
+    let law = TestLaw::stvk(2.0e7, 1.2e7, 3.0e6, 1.5e6)
+        .warp(&[0.6, 0.4], &[1.0, 8.0])
+        .weft(&[1.0], &[3.0])
+        .shear(&[1.5, -0.5], &[2.0, -2.0])
+        .cutoffs((0.0, 0.02), (0.0, 0.03), (-0.02, 0.02))
+        .law();
     let mut mesh = rectangular_grid(0.04, 0.06, 3, 4);
     for p in &mut mesh.positions {
         p[2] = 4.0 * p[0] * p[0] - 3.0 * p[0] * p[1];
@@ -514,16 +467,10 @@ fn stiff_yarns_on_face_centres_do_not_lock_in_bias_extension() {
         (energy(d + 1e-6) - energy(d - 1e-6)) / 2e-6
     };
     assert!((net - 0.1738).abs() < 5e-5, "net {net}");
-    let mut m = fabric(
-        OrthotropicStvk {
-            a11: 1.0e10,
-            a22: 1.0e10,
-            a12: 0.0,
-            g12: 3.0e4,
-        },
-        3e-4,
-    );
-    m.areal_density = 0.3;
+    let m = TestLaw::stvk(1.0e10, 1.0e10, 0.0, 3.0e4)
+        .density(0.3)
+        .thickness(3e-4)
+        .material();
     for mesh in [(4, 12), (8, 24)] {
         let force = |rule: YarnRule| {
             let mut strip = TensileStrip::new(0.15, 0.45, 45.0);

@@ -4,7 +4,8 @@
 //! first step) each strategy must still end at a stable state, but not necessarily the same
 //! one: wrinkle patterns are not unique.
 
-use kshell::material::{FabricMaterial, OrthotropicStvk};
+use crate::common::TestLaw;
+use kshell::material::FabricMaterial;
 use kshell::scene::{TensilePoint, TensileStrip};
 use kshell::solve::{NewtonOptions, Strategy};
 
@@ -43,19 +44,10 @@ fn every_strategy_gives_the_same_forces_where_the_equilibrium_is_unique() {
 
 #[test]
 fn every_strategy_ends_stable_on_a_wrinkling_strip() {
-    let m = FabricMaterial {
-        name: "thin".into(),
-        areal_density: 0.1,
-        thickness: 5.0e-5,
-        law: OrthotropicStvk {
-            a11: 1.0e9,
-            a22: 1.0e8,
-            a12: 1.0e7,
-            g12: 1.0e5,
-        }
-        .into(),
-        bending: None,
-    };
+    let m = TestLaw::stvk(1.0e9, 1.0e8, 1.0e7, 1.0e5)
+        .named("thin")
+        .thickness(5.0e-5)
+        .material();
     for (name, curve) in curves(&m, &[0.01, 0.03]) {
         let forces: Vec<f64> = curve.iter().map(|p| p.force).collect();
         eprintln!("{name}: {forces:?} N");
@@ -71,8 +63,11 @@ fn every_strategy_ends_stable_on_a_wrinkling_strip() {
 /// energy), and the point lands on the same equilibrium as a run with half the step.
 #[test]
 fn a_stiff_yarn_strip_does_not_crawl_from_a_poor_predictor() {
-    let text = "name = \"ratio-1000\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 1.0e9\na22_pa = 3.0e8\ng12_pa = 1.0e6\n";
-    let m = kshell::material::parse_material(text, "ratio-1000.toml").unwrap();
+    let m = TestLaw::stvk(1.0e9, 3.0e8, 1.5e8, 1.0e6)
+        .named("ratio-1000")
+        .density(0.25)
+        .thickness(3.0e-4)
+        .material();
     let run = |steps: usize| {
         let mut strip = TensileStrip::new(0.05, 0.075, 22.5);
         strip.mesh = (16, 24);
@@ -113,8 +108,11 @@ fn a_stiff_yarn_strip_does_not_crawl_from_a_poor_predictor() {
 /// state 1.6e-5 lower: wrinkling paths are chaotic, so the bound sits between the two).
 #[test]
 fn a_settling_first_attempt_keeps_its_budget() {
-    let text = "name = \"ratio-20000\"\nareal_density_g_m2 = 250.0\nthickness_mm = 0.3\na11_pa = 3.0e9\na22_pa = 1.0e9\ng12_pa = 1.5e5\n";
-    let m = kshell::material::parse_material(text, "ratio-20000.toml").unwrap();
+    let m = TestLaw::stvk(3.0e9, 1.0e9, 5.0e8, 1.5e5)
+        .named("ratio-20000")
+        .density(0.25)
+        .thickness(3.0e-4)
+        .material();
     let mut strip = TensileStrip::new(0.05, 0.075, 67.5);
     strip.mesh = (16, 24);
     strip.grading = kshell::scene::STRIP_GRADING;
@@ -167,12 +165,7 @@ fn a_start_whose_forces_overflow_is_refused() {
     use kshell::solve::{newton, FreeSystem, SolveError};
     use kshell::subdiv::{BasisOptions, LimitBasis};
     use std::sync::Arc;
-    let law = OrthotropicStvk {
-        a11: 2.0e8,
-        a22: 1.2e8,
-        a12: 2.0e7,
-        g12: 4.0e6,
-    };
+    let law = TestLaw::stvk(2.0e8, 1.2e8, 2.0e7, 4.0e6).stvk_law();
     let mesh = rectangular_grid(0.05, 0.075, 2, 3);
     let basis = LimitBasis::new(&mesh, BasisOptions::default()).unwrap();
     let model = ShellModel::new(
