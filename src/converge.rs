@@ -216,12 +216,69 @@ pub fn curve_errors(curves: &[Vec<f64>]) -> Vec<Option<f64>> {
     errors
 }
 
+/// How a level's error is measured against a tolerance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ErrorMeasure {
+    /// |q − q∞| / |q∞| ([`Level::est_error`])
+    Relative,
+    /// |q − q∞|, in the quantity's own unit (a drape angle's degrees)
+    Absolute,
+}
+
+/// The mesh a ladder keeps for a tolerance: the coarsest level whose Richardson estimate meets
+/// it, else the finest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Chosen {
+    /// level `index` is the coarsest that meets the tolerance, with this estimated error
+    Met { index: usize, error: f64 },
+    /// no level meets it: the finest, with its estimated error
+    NotMet { error: f64 },
+    /// the ladder does not converge monotonically, so there is no estimate: the finest
+    NoEstimate,
+}
+
+impl Chosen {
+    /// The index of the kept level in a ladder of `levels` levels.
+    pub fn index(&self, levels: usize) -> usize {
+        match *self {
+            Chosen::Met { index, .. } => index,
+            _ => levels.saturating_sub(1),
+        }
+    }
+
+    /// The kept level's estimated error, if there is an estimate.
+    pub fn error(&self) -> Option<f64> {
+        match *self {
+            Chosen::Met { error, .. } | Chosen::NotMet { error } => Some(error),
+            Chosen::NoEstimate => None,
+        }
+    }
+}
+
 impl Study {
-    /// The coarsest level whose estimated relative error is below `tol`.
-    pub fn pick(&self, tol: f64) -> Option<&Level> {
+    /// Each level's estimated error in `measure` (`None` without an extrapolated value).
+    pub fn errors(&self, measure: ErrorMeasure) -> Vec<Option<f64>> {
         self.levels
             .iter()
-            .find(|l| l.est_error.is_some_and(|e| e < tol))
+            .map(|l| match measure {
+                ErrorMeasure::Relative => l.est_error,
+                ErrorMeasure::Absolute => self.extrapolated.map(|q| (l.qoi - q).abs()),
+            })
+            .collect()
+    }
+
+    /// The coarsest level whose estimated error is below `tol`, else the finest: the one rule
+    /// by which every automatic mesh of a scene is kept.
+    pub fn choose(&self, tol: f64, measure: ErrorMeasure) -> Chosen {
+        let errors = self.errors(measure);
+        if let Some(index) = errors.iter().position(|e| e.is_some_and(|e| e < tol)) {
+            let error = errors[index].unwrap_or(0.0);
+            return Chosen::Met { index, error };
+        }
+        match errors.last().copied().flatten() {
+            Some(error) => Chosen::NotMet { error },
+            None => Chosen::NoEstimate,
+        }
     }
 
     /// Whitespace-aligned table with a header row.
@@ -393,13 +450,62 @@ mod tests {
         for l in &s.levels[1..3] {
             assert!((l.order.unwrap() - 2.0).abs() < 1e-9);
         }
-        assert_eq!(s.pick(2e-3).unwrap().mesh, (32, 48));
-        assert!(s.pick(1e-3).is_none());
-        assert_eq!(s.pick(1e-2).unwrap().mesh, (16, 24));
+        let mesh = |tol: f64| match s.choose(tol, ErrorMeasure::Relative) {
+            Chosen::Met { index, .. } => Some(s.levels[index].mesh),
+            _ => None,
+        };
+        assert_eq!(mesh(2e-3), Some((32, 48)));
+        assert_eq!(mesh(1e-3), None);
+        assert_eq!(mesh(1e-2), Some((16, 24)));
         assert!(s.table().starts_with("mesh"));
         assert!(s.csv().starts_with("mesh,nx,ny,dofs,seconds,qoi"));
         assert!(s.svg("test").unwrap().contains("<svg"));
         assert_eq!(parse_ladder("4x6, 8X12").unwrap(), vec![(4, 6), (8, 12)]);
         assert!(parse_ladder("4x0").is_err());
+    }
+
+    fn levels(qois: &[f64]) -> Vec<Level> {
+        qois.iter()
+            .enumerate()
+            .map(|(k, &qoi)| Level {
+                mesh: (4 << k, 6 << k),
+                dofs: 0,
+                seconds: 0.0,
+                qoi,
+                diff_to_next: None,
+                est_error: None,
+                order: None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn choose_keeps_the_coarsest_level_that_meets_the_tolerance_else_the_finest() {
+        // 10, 11, 11.5: order 1, limit 12, absolute errors 2, 1 and 0.5
+        let s = analyse(levels(&[10.0, 11.0, 11.5]));
+        assert_eq!(s.extrapolated, Some(12.0));
+        let met = s.choose(1.5, ErrorMeasure::Absolute);
+        assert_eq!(
+            met,
+            Chosen::Met {
+                index: 1,
+                error: 1.0
+            }
+        );
+        assert_eq!(met.index(3), 1);
+        let not_met = s.choose(0.4, ErrorMeasure::Absolute);
+        assert_eq!(not_met, Chosen::NotMet { error: 0.5 });
+        assert_eq!(not_met.index(3), 2);
+        // relative: 1/12 on the middle level
+        let rel = s.choose(0.1, ErrorMeasure::Relative);
+        assert_eq!(rel.index(3), 1);
+        assert!((rel.error().unwrap() - 1.0 / 12.0).abs() < 1e-15);
+        // no change between the coarse two: no order, no estimate
+        let flat = analyse(levels(&[10.0, 10.0, 11.0]));
+        assert_eq!(
+            flat.choose(100.0, ErrorMeasure::Absolute),
+            Chosen::NoEstimate
+        );
+        assert_eq!(flat.choose(100.0, ErrorMeasure::Relative).index(3), 2);
     }
 }

@@ -10,7 +10,7 @@
 //! own drape angles with exact sensitivities ∂θ/∂B.
 
 use super::optim::{minimize, Evaluation};
-use super::{to_evaluation, FitError, Fitter};
+use super::{to_evaluation, FitError, Fitter, Work};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::BendTest;
 use crate::material::bending::{bias_ratio, twist_following};
@@ -118,9 +118,7 @@ impl Fitter<'_> {
             },
         )?;
         let (evals, newton, seen) = (problem.evals, problem.newton, problem.seen);
-        self.stats.evaluations += evals;
-        self.stats.equilibria += evals;
-        self.stats.newton_iterations += newton;
+        self.stats.record(Work::single_solves(evals, newton));
         let b = rigidity.at(&p);
         self.bending_errors(b, off_axis, &seen, &p, level);
         self.bend_angles.clear();
@@ -131,9 +129,7 @@ impl Fitter<'_> {
                 source,
             })?;
             self.bend_angles.push(pt.drape_angle_deg);
-            self.stats.evaluations += 1;
-            self.stats.equilibria += 1;
-            self.stats.newton_iterations += pt.report.iterations;
+            self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.keep_bend_rigs(bends, level, rigs);
         self.bending = Some(b);

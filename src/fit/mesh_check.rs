@@ -24,7 +24,7 @@
 
 mod notes;
 
-use super::{FitError, Fitter};
+use super::{FitError, Fitter, Work};
 use crate::material::BendingRigidity;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -403,7 +403,10 @@ impl Fitter<'_> {
                     .map(|p| (p.drape_angle_deg, p.report.iterations))
             })
             .collect();
-        self.stats.evaluations += runs.len();
+        self.stats.record(Work {
+            evaluations: runs.len(),
+            ..Work::default()
+        });
         self.keep_bend_rigs(&data.bend, level, rigs);
         let runs: Vec<(f64, usize)> =
             runs.into_iter()
@@ -412,8 +415,12 @@ impl Fitter<'_> {
                     stage: format!("mesh check: the cantilevers on {}×{}", level.0, level.1),
                     source,
                 })?;
-        self.stats.equilibria += runs.len();
-        self.stats.newton_iterations += runs.iter().map(|r| r.1).sum::<usize>();
+        self.stats.record(Work {
+            evaluations: 0,
+            equilibria: runs.len(),
+            newton_iterations: runs.iter().map(|r| r.1).sum(),
+            ..Work::default()
+        });
         Ok(runs.into_iter().map(|r| r.0).collect())
     }
 

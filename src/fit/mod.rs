@@ -162,6 +162,62 @@ pub struct FitStats {
     counted: usize,
 }
 
+/// Solver work done by one stage or run, which [`FitStats::record`] adds to the fit's totals:
+/// the one place the counters change.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Work {
+    /// shell-model evaluations (runs of a strip or cantilever)
+    pub evaluations: usize,
+    /// equilibria solved
+    pub equilibria: usize,
+    pub newton_iterations: usize,
+    /// equilibria that ended unstable
+    pub unstable: usize,
+    /// homogeneous-strip evaluations
+    pub bootstrap_evaluations: usize,
+}
+
+impl Work {
+    /// One run that solved `equilibria` equilibria in `newton_iterations` iterations.
+    pub fn run(equilibria: usize, newton_iterations: usize) -> Self {
+        Self {
+            evaluations: 1,
+            equilibria,
+            newton_iterations,
+            ..Self::default()
+        }
+    }
+
+    /// `evaluations` runs of one equilibrium each (cantilevers, minimiser evaluations).
+    pub fn single_solves(evaluations: usize, newton_iterations: usize) -> Self {
+        Self {
+            evaluations,
+            equilibria: evaluations,
+            newton_iterations,
+            ..Self::default()
+        }
+    }
+
+    /// Homogeneous-strip evaluations only.
+    pub fn bootstrap(evaluations: usize) -> Self {
+        Self {
+            bootstrap_evaluations: evaluations,
+            ..Self::default()
+        }
+    }
+}
+
+impl FitStats {
+    /// Adds a stage's or a run's solver work to the totals.
+    pub(crate) fn record(&mut self, w: Work) {
+        self.evaluations += w.evaluations;
+        self.equilibria += w.equilibria;
+        self.newton_iterations += w.newton_iterations;
+        self.unstable_solves += w.unstable;
+        self.bootstrap_evaluations += w.bootstrap_evaluations;
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct FitResult {
     pub material: FabricMaterial,

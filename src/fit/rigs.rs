@@ -3,7 +3,7 @@
 //! measured on them.
 
 use super::preprocess::interpolation_weights;
-use super::{FitError, Fitter, RigKey, FIT_RTOL, NEAR_ANGLE_DEG};
+use super::{FitError, Fitter, RigKey, Work, FIT_RTOL, NEAR_ANGLE_DEG};
 use crate::assembly::YarnRule;
 use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig, TensileStrip};
@@ -160,9 +160,8 @@ impl Fitter<'_> {
         rig.set_material(law, self.thickness)?;
         rig.set_bending(self.bending);
         let pts = rig.run(sens)?;
-        self.stats.evaluations += 1;
-        self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
-        self.stats.equilibria += pts.len();
+        let newton = pts.iter().map(|p| p.report.iterations).sum();
+        self.stats.record(Work::run(pts.len(), newton));
         Ok((
             pts.iter().map(node_force).collect(),
             pts.into_iter().map(|p| p.dforce).collect(),
@@ -276,10 +275,8 @@ impl Fitter<'_> {
         for ((key, rig, angle), r) in todo.into_iter().zip(results) {
             match r {
                 Ok(pts) => {
-                    self.stats.evaluations += 1;
-                    self.stats.newton_iterations +=
-                        pts.iter().map(|p| p.report.iterations).sum::<usize>();
-                    self.stats.equilibria += pts.len();
+                    let newton = pts.iter().map(|p| p.report.iterations).sum();
+                    self.stats.record(Work::run(pts.len(), newton));
                     let f: Vec<f64> = pts.iter().map(node_force).collect();
                     self.lab.predictions.insert((key.clone(), bits.clone()), f);
                 }

@@ -18,7 +18,7 @@
 //! test; its force converges with the mesh where the wrinkles do not), reusing the scan's
 //! solves; without a measured force G12 stays assumed and a warning says why.
 
-use super::{FitError, Fitter};
+use super::{FitError, Fitter, Work};
 use crate::dataset::FabricDataset;
 use crate::fit::shape_target::ShapeTarget;
 use crate::fit::tri::SHAPE_TRUST;
@@ -122,13 +122,19 @@ impl Fitter<'_> {
                 describe(&targets, &at_shapes),
                 100.0 * SHAPE_TRUST
             ));
-            self.stats.evaluations += scan.evaluations;
+            self.stats.record(Work {
+                evaluations: scan.evaluations,
+                ..Work::default()
+            });
             self.time_stage("shapes", t0);
             return Ok(false);
         };
         self.law.g12 = g12;
         let evaluations = scan.evaluations;
-        self.stats.evaluations += evaluations;
+        self.stats.record(Work {
+            evaluations,
+            ..Work::default()
+        });
         let errors = scan.errors(g12);
         self.journal.say(&format!(
             "shapes stage: G12 = {g12:.4e} Pa from {} captured shape(s)' {basis} (assumed {g0:.4e} Pa), shape error {} ({evaluations} scene solves, objective {f:.3e})",

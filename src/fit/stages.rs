@@ -8,7 +8,7 @@ use super::map::{beta_to_var, Direction, StageMap};
 use super::optim::OptimReport;
 use super::surrogate::{homogeneous_fit, MappedStart};
 use super::uncertainty::Seen;
-use super::{FitError, Fitter, RigKey, StrainRange};
+use super::{FitError, Fitter, RigKey, StrainRange, Work};
 use crate::scene::{SceneError, StripRig};
 use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
 use rayon::prelude::*;
@@ -51,7 +51,7 @@ impl Fitter<'_> {
             .collect();
         let mut best: Option<(Vec<f64>, f64, f64)> = None;
         for fit in fits.into_iter().flatten() {
-            self.stats.bootstrap_evaluations += fit.evaluations;
+            self.stats.record(Work::bootstrap(fit.evaluations));
             if best.as_ref().is_none_or(|b| fit.error < b.1) {
                 best = Some((fit.p, fit.error, fit.shape));
             }
@@ -298,7 +298,8 @@ impl Fitter<'_> {
         };
         let predict = !first_level && !stiffness_only;
         let (m, rounds) = stage_start(sp, &self.prep, p, predict, rounds).map_err(fail)?;
-        self.stats.bootstrap_evaluations += m.homogeneous_evaluations;
+        self.stats
+            .record(Work::bootstrap(m.homogeneous_evaluations));
         let note = mapped_note(map, p, level, &m);
         // a trial screened at its mapped start: given up unless the shape error has not
         // risen or the rms error already fell by the degree gain there
@@ -343,10 +344,13 @@ impl Fitter<'_> {
 
     /// Adds a stage's work to the fit's statistics.
     fn add_counts(&mut self, c: &Counts) {
-        self.stats.evaluations += c.evals;
-        self.stats.newton_iterations += c.newton;
-        self.stats.equilibria += c.solved;
-        self.stats.unstable_solves += c.unstable;
+        self.stats.record(Work {
+            evaluations: c.evals,
+            equilibria: c.solved,
+            newton_iterations: c.newton,
+            unstable: c.unstable,
+            bootstrap_evaluations: 0,
+        });
     }
 
     /// At the stage's optimum p: records the standard errors and the linearisation from the

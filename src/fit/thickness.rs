@@ -3,7 +3,7 @@
 //! fits, are kept (the bending rigidity goes as a·τ³/12).
 
 use super::optim::{minimize, Evaluation};
-use super::{to_evaluation, FitError, Fitter};
+use super::{to_evaluation, FitError, Fitter, Work};
 use crate::dataset::BendTest;
 use crate::scene::{BendRig, CantileverBend, SceneError};
 use rayon::prelude::*;
@@ -156,9 +156,7 @@ impl Fitter<'_> {
             stage: format!("thickness stage on {}×{}", level.0, level.1),
             source,
         })?;
-        self.stats.evaluations += evals;
-        self.stats.equilibria += evals;
-        self.stats.newton_iterations += newton;
+        self.stats.record(Work::single_solves(evals, newton));
         let (law, tau) = scaled(&p);
         if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
             self.evidence
@@ -185,9 +183,7 @@ impl Fitter<'_> {
                     source,
                 })?;
             self.bend_angles.push(pt.drape_angle_deg);
-            self.stats.evaluations += 1;
-            self.stats.equilibria += 1;
-            self.stats.newton_iterations += pt.report.iterations;
+            self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.keep_bend_rigs(bends, level, rigs);
         self.law = law;

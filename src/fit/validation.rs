@@ -14,7 +14,7 @@
 use super::map::A12Rule;
 use super::preprocess::Curve;
 use super::tolerances::INTERPOLATION_TOL;
-use super::{FitError, Fitter, TestOutcome};
+use super::{FitError, Fitter, TestOutcome, Work};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
 
@@ -132,9 +132,8 @@ impl Fitter<'_> {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
             })?;
-            self.stats.evaluations += 1;
-            self.stats.newton_iterations += pts.iter().map(|p| p.report.iterations).sum::<usize>();
-            self.stats.equilibria += pts.len();
+            let newton = pts.iter().map(|p| p.report.iterations).sum();
+            self.stats.record(Work::run(pts.len(), newton));
             for (&e, p) in mids.iter().zip(&pts) {
                 let interp: f64 = super::preprocess::interpolation_weights(&strip.nodes, e)
                     .iter()

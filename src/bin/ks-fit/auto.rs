@@ -5,6 +5,7 @@
 //! converge monotonically, the finest is kept with a WARNING.
 
 use crate::lab_args::{check_strip_size, describe, SceneArgs, BEND_TOL_DEG, TENSILE_TOL};
+use kshell::converge::{Chosen, ErrorMeasure};
 use kshell::material::FabricMaterial;
 use kshell::scene::{TensilePoint, TensileStrip, STRIP_GRADING};
 use std::time::Instant;
@@ -77,24 +78,16 @@ pub fn auto_bend(
             order: None,
         })
         .collect();
-    let study = kshell::converge::analyse(levels);
-    let errors: Vec<Option<f64>> = match study.extrapolated {
-        Some(q) => runs
-            .iter()
-            .map(|(_, r, _)| Some((r.drape_angle_deg - q).abs()))
-            .collect(),
-        None => vec![None; 3],
-    };
-    let pick = errors.iter().position(|e| e.is_some_and(|e| e < tol));
-    let i = pick.unwrap_or(2);
+    let chosen = kshell::converge::analyse(levels).choose(tol, ErrorMeasure::Absolute);
+    let i = chosen.index(runs.len());
     let (mesh, _, _) = runs[i];
-    let said = match (pick, errors[i]) {
-        (Some(_), Some(e)) => format!("estimated error {e:.3}° < --tol {tol}°"),
-        (None, Some(e)) => format!(
+    let said = match chosen {
+        Chosen::Met { error: e, .. } => format!("estimated error {e:.3}° < --tol {tol}°"),
+        Chosen::NotMet { error: e } => format!(
             "WARNING: no mesh meets --tol {}°; the finest, estimated error {e:.3}°",
             tol
         ),
-        _ => {
+        Chosen::NoEstimate => {
             "WARNING: the three angles do not converge monotonically, no error estimate; the finest"
                 .into()
         }

@@ -453,12 +453,16 @@ pub fn cmd_converge(scene: ConvergeScene, force: bool) -> Result<(), String> {
     let result = run_study(&scene, &ladder)?;
     print!("{}", result.table());
     if let Some(t) = study_args.tol {
-        match result.pick(t) {
-            Some(l) => println!(
-                "coarsest mesh with estimated error below {t:e}: {}x{} ({} DOFs, {:.2} s)",
-                l.mesh.0, l.mesh.1, l.dofs, l.seconds
-            ),
-            None => println!("no mesh of this ladder has an estimated error below {t:e}"),
+        let chosen = result.choose(t, kshell::converge::ErrorMeasure::Relative);
+        match chosen {
+            kshell::converge::Chosen::Met { index, .. } => {
+                let l = &result.levels[index];
+                println!(
+                    "coarsest mesh with estimated error below {t:e}: {}x{} ({} DOFs, {:.2} s)",
+                    l.mesh.0, l.mesh.1, l.dofs, l.seconds
+                )
+            }
+            _ => println!("no mesh of this ladder has an estimated error below {t:e}"),
         }
     }
     if let Some(p) = &study_args.csv {

@@ -7,7 +7,7 @@ use crate::flags::Model;
 use crate::guard::Guard;
 use crate::scene_shape::{SceneMaterial, Shape};
 use clap::Subcommand;
-use kshell::converge::{analyse, Level};
+use kshell::converge::{analyse, Chosen, ErrorMeasure, Level};
 use kshell::material::{load_material, FabricMaterial};
 use kshell::scene::{CornerPull, Drape, PictureFrame, SceneError};
 use kshell::solve::NewtonOptions;
@@ -411,25 +411,24 @@ fn choose(scene: &ShowScene, tol: f64, runs: Vec<(usize, Run)>) -> (Run, Choice)
         })
         .collect();
     let study = analyse(levels);
-    let picked = study.pick(tol).map(|l| l.mesh.0);
-    let n = picked.unwrap_or(runs.last().map_or(0, |r| r.0));
-    let level = study.levels.iter().find(|l| l.mesh.0 == n);
-    let est_error = level.and_then(|l| l.est_error);
-    let why = match (picked, est_error) {
-        (Some(_), Some(e)) => format!(
+    let chosen = study.choose(tol, ErrorMeasure::Relative);
+    let n = runs[chosen.index(runs.len())].0;
+    let est_error = chosen.error();
+    let why = match chosen {
+        Chosen::Met { error: e, .. } => format!(
             "automatic: the coarsest of {} whose estimated error in the {} is below --tol {}: {:.2} %",
             ladder_text(&study.levels),
             scene.qoi_name(),
             tol,
             100.0 * e
         ),
-        (_, Some(e)) => format!(
+        Chosen::NotMet { error: e } => format!(
             "automatic: WARNING no mesh of {} meets --tol {}; the finest, estimated error {:.2} %",
             ladder_text(&study.levels),
             tol,
             100.0 * e
         ),
-        (_, None) => format!(
+        Chosen::NoEstimate => format!(
             "automatic: WARNING the ladder {} does not converge monotonically, no error estimate; the finest",
             ladder_text(&study.levels)
         ),
