@@ -24,6 +24,7 @@
 
 mod lab;
 mod overhang;
+pub mod zoo;
 
 pub use lab::LabModel;
 

@@ -1,0 +1,219 @@
+//! A zoo fabric's dataset: its curves measured (law fabrics, in the virtual lab) or evaluated
+//! (analytic fabrics), resampled to the lab's points, with the lab's artefacts.
+
+use super::curves::pchip;
+use super::{Export, Protocol, Source, ZooFabric, G};
+use crate::assembly::YarnRule;
+use crate::dataset::{BendTest, FabricDataset, Known, TensileTest, DEFAULT_DRAPE_ANGLE_DEG};
+use crate::material::material_toml;
+use crate::scene::STRIP_GRADING;
+use crate::synth::{LabModel, Rng, SynthError};
+use std::path::PathBuf;
+
+/// A built dataset: the dataset (curve paths relative to its folder), each curve file's text,
+/// and the truth's material file for law fabrics.
+#[derive(Clone, Debug)]
+pub struct ZooDataset {
+    pub data: FabricDataset,
+    pub curves: Vec<(PathBuf, String)>,
+    pub truth: Option<String>,
+}
+
+/// Points the virtual lab solves a law fabric's curve at; the lab's record is interpolated
+/// between them ([`pchip`]).
+const SOLVED_POINTS: usize = 12;
+
+/// Faces across a strip; along it, as many as keep the faces square.
+const STRIP_FACES_ACROSS: usize = 12;
+
+/// Cantilever width, m (ASTM D1388: 25 mm).
+const BEND_WIDTH: f64 = 0.025;
+
+/// The dataset of `fabric`; `progress` gets a line per curve.
+pub fn build(fabric: &ZooFabric, progress: &mut dyn FnMut(&str)) -> Result<ZooDataset, SynthError> {
+    let p = &fabric.protocol;
+    let mut rng = Rng(fabric
+        .name
+        .bytes()
+        .fold(17u64, |h, b| h.wrapping_mul(31).wrapping_add(b as u64)));
+    let (mut tensile, mut curves) = (Vec::new(), Vec::new());
+    for &angle in &p.angles {
+        for r in 1..=p.repeats {
+            let stem = format!("a{angle}-{r}");
+            let cut = angle + p.misalign_deg * rng.normal();
+            let lab = lab_curve(&fabric.source, p, cut).map_err(|e| match e {
+                SynthError::Scene { source, .. } => SynthError::Scene {
+                    test: format!("{}: tensile {stem}", fabric.name),
+                    source,
+                },
+                other => other,
+            })?;
+            let (test, text) = record(p, angle, &stem, &lab, &mut rng);
+            progress(&format!("{}: {stem} ({} points)", fabric.name, p.points));
+            tensile.push(test);
+            curves.push((PathBuf::from(format!("{stem}.csv")), text));
+        }
+    }
+    let bend = if p.bends {
+        bends(&fabric.source)?
+    } else {
+        Vec::new()
+    };
+    let (areal_density, thickness) = match &fabric.source {
+        Source::Law(m) => (m.areal_density, m.thickness),
+        Source::Analytic {
+            areal_density,
+            thickness,
+            ..
+        } => (*areal_density, *thickness),
+    };
+    let mut known = Known::default();
+    if let (true, Source::Law(m)) = (p.bias_only, &fabric.source) {
+        known.a11 = Some(m.law.a11);
+        known.a22 = Some(m.law.a22);
+        known.thickness = Some(m.thickness);
+    }
+    let truth = match &fabric.source {
+        Source::Law(m) => Some(material_toml(m)),
+        Source::Analytic { .. } => None,
+    };
+    let data = FabricDataset {
+        name: fabric.name.clone(),
+        path: PathBuf::from("fabric.toml"),
+        areal_density: Some(areal_density),
+        thickness,
+        tensile,
+        bend,
+        shapes: Vec::new(),
+        known,
+        notes: Vec::new(),
+    };
+    Ok(ZooDataset {
+        data,
+        curves,
+        truth,
+    })
+}
+
+/// The exact curve of one strip cut at `cut` degrees at [`SOLVED_POINTS`] elongations:
+/// (elongation m, force N) from zero to the protocol's largest strain.
+fn lab_curve(source: &Source, p: &Protocol, cut: f64) -> Result<Vec<(f64, f64)>, SynthError> {
+    let (width, gauge) = p.strip;
+    let top = p.max_strain * gauge;
+    let n = SOLVED_POINTS.min(p.points.max(2));
+    let elongations: Vec<f64> = (1..=n).map(|i| top * i as f64 / n as f64).collect();
+    let forces: Vec<f64> = match source {
+        Source::Law(m) => {
+            let across = STRIP_FACES_ACROSS;
+            let along = ((across as f64 * gauge / width).round() as usize).max(across);
+            let strip = LabModel::Shell(m.clone()).strip(
+                (width, gauge, cut),
+                (across, along),
+                (STRIP_GRADING, YarnRule::Auto),
+                &elongations,
+            );
+            let strip = strip.map_err(|source| SynthError::Scene {
+                test: String::new(),
+                source,
+            })?;
+            strip.iter().map(|f| f.0).collect()
+        }
+        Source::Analytic {
+            warp, weft, bias, ..
+        } => {
+            // the nearest of warp (90°), bias (45°) and weft (0°)
+            let family = match cut {
+                a if a >= 67.5 => warp,
+                a if a <= 22.5 => weft,
+                _ => bias,
+            };
+            elongations
+                .iter()
+                .map(|e| family.force(width, e / gauge))
+                .collect()
+        }
+    };
+    let mut curve = vec![(0.0, 0.0)];
+    curve.extend(elongations.into_iter().zip(forces));
+    Ok(curve)
+}
+
+/// The lab's record of one strip from its exact curve: `points` points over the machine's
+/// travel, slack or preload, noise, and the export's units. Returns the test and the CSV text.
+fn record(
+    p: &Protocol,
+    angle: f64,
+    stem: &str,
+    exact: &[(f64, f64)],
+    rng: &mut Rng,
+) -> (TensileTest, String) {
+    let (xs, ys): (Vec<f64>, Vec<f64>) = exact.iter().copied().unzip();
+    let top = xs[xs.len() - 1];
+    let fmax = ys.iter().fold(0.0f64, |a, &b| a.max(b));
+    let scale = (1.0 + p.scale_noise * rng.normal()).max(0.5);
+    let travel = top + p.slack - p.preload;
+    let mut elongation = Vec::with_capacity(p.points);
+    let mut force = Vec::with_capacity(p.points);
+    for i in 1..=p.points {
+        let e = travel * i as f64 / p.points as f64;
+        let strain_e = e - p.slack + p.preload;
+        let f = if strain_e <= 0.0 {
+            // slack: the load cell's noise around zero
+            0.002 * fmax * rng.normal()
+        } else {
+            pchip(&xs, &ys, strain_e) * scale * (1.0 + p.point_noise * rng.normal())
+        };
+        elongation.push(e);
+        force.push(f.max(-0.005 * fmax));
+    }
+    let (header, divisor, force_scale) = match p.export {
+        Export::Newtons => ("elongation_mm,force_n", 1.0, 1.0),
+        Export::KiloNewtonsHeader => ("Extension (mm),Load (kN)", 1e3, 1.0),
+        Export::KiloNewtonsScaled => ("elongation_mm,force_n", 1e3, 1e3),
+    };
+    let mut text = format!("{header}\n");
+    for (e, f) in elongation.iter().zip(&force) {
+        text += &format!("{:.6},{:.6e}\n", e * 1e3, f / divisor);
+    }
+    let mut test = TensileTest::new(
+        angle,
+        p.strip.0,
+        p.strip.1,
+        PathBuf::from(format!("{stem}.csv")),
+        elongation,
+        force,
+    );
+    test.force_scale = force_scale;
+    (test, text)
+}
+
+/// Warp and weft cantilevers at 41.5°: the virtual lab's overhang for law fabrics, twice
+/// ASTM D1388's bending length c = (G / (ρ g))^⅓ for analytic ones.
+fn bends(source: &Source) -> Result<Vec<BendTest>, SynthError> {
+    let mut out = Vec::new();
+    for (k, angle) in [90.0, 0.0].into_iter().enumerate() {
+        let overhang = match source {
+            Source::Law(m) => {
+                let solves = std::cell::Cell::new(0);
+                let lab = LabModel::Shell(m.clone());
+                let test = format!("{}: cantilever {angle}°", m.name);
+                crate::synth::overhang::find_overhang(&lab, angle, &test, &solves)?.overhang
+            }
+            Source::Analytic {
+                areal_density,
+                bending,
+                ..
+            } => {
+                let g = if k == 0 { bending.0 } else { bending.1 };
+                2.0 * (g / (areal_density * G)).cbrt()
+            }
+        };
+        out.push(BendTest {
+            angle_deg: angle,
+            width: BEND_WIDTH,
+            overhang,
+            drape_angle_deg: DEFAULT_DRAPE_ANGLE_DEG,
+        });
+    }
+    Ok(out)
+}
