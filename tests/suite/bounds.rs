@@ -4,9 +4,11 @@
 //! bound is tested just over its limit (the limits are the library's constants).
 
 use crate::common::{folder, ks_fit, s};
-use kshell::limits::{MAX_CURVE_POINTS, MAX_CURVE_ROWS, MAX_DATASET_TESTS};
+use kshell::limits::{MAX_CURVE_POINTS, MAX_CURVE_ROWS, MAX_DATASET_TESTS, MAX_LAW_TERMS};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+const MATERIAL: &str = "examples/materials/cotton.toml";
 
 /// Exit code 2 and a first line `ks-fit: error: …` containing `want`; the whole stderr.
 fn refused(args: &[&str], want: &str) -> String {
@@ -109,6 +111,71 @@ fn a_curve_over_the_hard_bound_is_refused_at_its_line() {
         err.contains(&format!("c.csv:{}:", MAX_CURVE_ROWS + 2)),
         "{err}"
     );
+}
+
+/// The example material with a `[warp]` law of `terms` terms, in a fresh folder.
+#[track_caller]
+fn material_with_terms(tag: &str, terms: usize) -> PathBuf {
+    let mut text = std::fs::read_to_string(MATERIAL).unwrap();
+    let mu: Vec<&str> = (0..terms)
+        .map(|i| if i == 0 { "1.0" } else { "0.0" })
+        .collect();
+    let alpha = vec!["1.0"; terms];
+    let _ = write!(
+        text,
+        "\n[warp]\nmu = [{}]\nalpha = [{}]\n",
+        mu.join(", "),
+        alpha.join(", ")
+    );
+    let path = folder(tag).join("m.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn a_law_of_too_many_terms_is_refused_at_its_line() {
+    let tensile = |m: &Path| {
+        [
+            "tensile",
+            "--material",
+            s(m),
+            "--angle",
+            "90",
+            "--width",
+            "50",
+            "--length",
+            "75",
+            "--to",
+            "1",
+            "--steps",
+            "1",
+            "--mesh",
+            "2x3",
+        ]
+        .map(String::from)
+    };
+    let over = material_with_terms("terms-over", MAX_LAW_TERMS + 1);
+    let args = tensile(&over);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let err = refused(
+        &args,
+        &format!(
+            "[warp] has {} terms, more than the {MAX_LAW_TERMS}",
+            MAX_LAW_TERMS + 1
+        ),
+    );
+    let line = std::fs::read_to_string(&over)
+        .unwrap()
+        .lines()
+        .position(|l| l.starts_with("mu = "))
+        .unwrap()
+        + 1;
+    assert!(err.contains(&format!("m.toml:{line}:")), "{err}");
+    let at = material_with_terms("terms-at", MAX_LAW_TERMS);
+    let args = tensile(&at);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (rc, _, err) = ks_fit(&args);
+    assert_eq!(rc, 0, "{err}");
 }
 
 #[test]
