@@ -233,3 +233,130 @@ fn check_shows_lab_numbers_rounded_and_refuses_an_implausible_density() {
         "{err}"
     );
 }
+
+#[test]
+fn clap_refusals_are_one_error_line_and_help_still_prints() {
+    for args in [
+        &["tensile", "--bogus"][..],
+        &["tensile"][..],
+        &["tensile", "--material", MATERIAL, "--steps", "abc"][..],
+        &["no-such-command"][..],
+        &[][..],
+    ] {
+        let (rc, out, err) = ks_fit(args);
+        assert_eq!(rc, 2, "{args:?}\n{out}{err}");
+        let lines: Vec<&str> = err.lines().collect();
+        assert!(lines[0].starts_with("ks-fit: error: "), "{args:?}:\n{err}");
+        let errors = lines
+            .iter()
+            .filter(|l| l.trim_start().to_lowercase().contains("error:"))
+            .count();
+        assert_eq!(errors, 1, "{args:?}: more than one error line:\n{err}");
+    }
+    let (_, _, err) = ks_fit(&["tensile"]);
+    let first = err.lines().next().unwrap();
+    assert!(
+        first.contains("--material") && first.contains("--steps"),
+        "{err}"
+    );
+    assert!(
+        err.contains("Usage: ks-fit tensile"),
+        "the usage is gone:\n{err}"
+    );
+    for flag in ["--help", "--version"] {
+        let (rc, out, err) = ks_fit(&[flag]);
+        assert_eq!(rc, 0, "{flag}: {err}");
+        assert!(
+            out.starts_with("Simulation-ready") || out.starts_with("ks-fit "),
+            "{out}"
+        );
+    }
+    let (rc, out, _) = ks_fit(&["tensile", "--help"]);
+    assert!(rc == 0 && out.contains("Usage: ks-fit tensile"), "{out}");
+}
+
+#[test]
+fn limits_and_huge_numbers_are_echoed_as_given() {
+    let err = refused(
+        &[
+            "--max-faces",
+            "0",
+            "tensile",
+            "--material",
+            MATERIAL,
+            "--angle",
+            "0",
+            "--width",
+            "50",
+            "--length",
+            "75",
+            "--to",
+            "1",
+            "--steps",
+            "1",
+            "--mesh",
+            "2x3",
+        ],
+        "--max-faces must be at least 1",
+    );
+    assert!(!err.contains("limit of 1"), "{err}");
+    let out = folder("echo");
+    let json = out.join("m.json");
+    for (args, want) in [
+        (
+            vec![
+                "export",
+                "--material",
+                MATERIAL,
+                "--format",
+                "arcsim",
+                "--out",
+                s(&json),
+                "--max-strain",
+                "1e308",
+            ],
+            "strain range",
+        ),
+        (
+            vec![
+                "scene",
+                "corner-pull",
+                "--material",
+                MATERIAL,
+                "--out",
+                s(&out),
+                "--stretch",
+                "1e308",
+            ],
+            "--stretch",
+        ),
+        (
+            vec![
+                "scene",
+                "drape",
+                "--material",
+                MATERIAL,
+                "--out",
+                s(&out),
+                "--tol",
+                "1e308",
+            ],
+            "--tol",
+        ),
+        (
+            vec![
+                "recommend",
+                "--material",
+                MATERIAL,
+                "--scene",
+                "tensile",
+                "--tol",
+                "1e308",
+            ],
+            "--tol",
+        ),
+    ] {
+        let err = refused(&args, want);
+        assert!(err.contains("1e308") && err.len() < 300, "{args:?}: {err}");
+    }
+}
