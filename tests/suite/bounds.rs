@@ -4,7 +4,9 @@
 //! bound is tested just over its limit (the limits are the library's constants).
 
 use crate::common::{folder, ks_fit, s};
-use kshell::limits::{MAX_CURVE_POINTS, MAX_CURVE_ROWS, MAX_DATASET_TESTS, MAX_LAW_TERMS};
+use kshell::limits::{
+    MAX_BATCH_ROWS, MAX_CURVE_POINTS, MAX_CURVE_ROWS, MAX_DATASET_TESTS, MAX_LAW_TERMS,
+};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -359,4 +361,49 @@ fn limits_and_huge_numbers_are_echoed_as_given() {
         let err = refused(&args, want);
         assert!(err.contains("1e308") && err.len() < 300, "{args:?}: {err}");
     }
+}
+
+#[test]
+fn a_manifest_of_too_many_rows_is_refused_at_the_first_beyond() {
+    let dir = folder("rows");
+    let mut text = String::from("fabric,dataset\n");
+    for i in 0..=MAX_BATCH_ROWS {
+        let _ = writeln!(text, "f{i},d/fabric.toml");
+    }
+    let manifest = dir.join("m.csv");
+    std::fs::write(&manifest, text).unwrap();
+    let err = refused(
+        &["batch", s(&manifest), "--out", s(&dir.join("out"))],
+        &format!("more than {MAX_BATCH_ROWS} fabrics"),
+    );
+    assert!(
+        err.contains(&format!("m.csv:{}:", MAX_BATCH_ROWS + 2)),
+        "{err}"
+    );
+    assert!(!dir.join("out").exists(), "the batch started");
+}
+
+#[test]
+fn a_batch_estimates_the_time_left_only_from_enough_fabrics() {
+    let dir = folder("eta");
+    let manifest = dir.join("m.csv");
+    let rows: String = (0..4)
+        .map(|i| format!("f{i},missing{i}/fabric.toml\n"))
+        .collect();
+    std::fs::write(&manifest, format!("fabric,dataset\n{rows}")).unwrap();
+    let (rc, _, err) = ks_fit(&["batch", s(&manifest), "--out", s(&dir.join("out"))]);
+    assert_eq!(rc, 3, "{err}");
+    let done: Vec<&str> = err.lines().filter(|l| l.contains(" of 4 done")).collect();
+    assert_eq!(done.len(), 4, "{err}");
+    for l in &done[..2] {
+        assert!(l.contains("time left not estimated until 3 fabrics"), "{l}");
+    }
+    assert!(
+        done[2].contains(", about ") && done[2].contains(" left (1 fabric at the "),
+        "{}",
+        done[2]
+    );
+    assert!(!done[3].contains("left"), "{}", done[3]);
+    let summary = std::fs::read_to_string(dir.join("out/summary.csv")).unwrap();
+    assert_eq!(summary.lines().count(), 5, "{summary}");
 }
