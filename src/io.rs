@@ -68,6 +68,20 @@ pub fn num(x: f64) -> String {
     }
 }
 
+/// Significant digits of a number shown to a reader: enough for any lab value, few
+/// enough to round away a unit conversion's last-digit noise (52 mm read as 0.052 m).
+pub const SHOWN_DIGITS: usize = 12;
+
+/// A number for a reader (not for reading back): rounded to [`SHOWN_DIGITS`] significant
+/// digits, then printed as [`num`] prints it (`52`, not `52.00000000000001`).
+pub fn shown(x: f64) -> String {
+    if !x.is_finite() {
+        return num(x);
+    }
+    let rounded = format!("{x:.prec$e}", prec = SHOWN_DIGITS - 1);
+    num(rounded.parse().unwrap_or(x))
+}
+
 /// A table cell: `decimals` fixed decimals for magnitudes below 1e9, exponent form above (a
 /// width typed as 1e300 prints as `1.0000e300`, not as 300 digits).
 pub fn cell(x: f64, decimals: usize) -> String {
@@ -106,6 +120,11 @@ mod tests {
         assert_eq!(num(0.25), "0.25");
         assert_eq!(num(2e-6), "2e-6");
         assert_eq!(cell(1e300, 4), "1.0000e300");
+        assert_eq!(shown(0.052 * 1e3), "52");
+        assert_eq!(shown(0.18e-3 * 1e3), "0.18");
+        assert_eq!(shown(103.6), "103.6");
+        assert_eq!(shown(1e300), "1e300");
+        assert_eq!(shown(1.0 / 3.0), "0.333333333333");
         assert_eq!(cell(12.345678, 2), "12.35");
     }
 

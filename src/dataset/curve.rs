@@ -18,6 +18,7 @@
 //! the largest force); anything more negative is an error.
 
 use super::{DatasetError, CURVE_HEADER};
+use crate::limits::{MAX_CURVE_POINTS, MAX_CURVE_ROWS};
 
 /// A curve in lab units (mm, N) with each row's line.
 pub(super) struct Curve {
@@ -286,6 +287,12 @@ pub(super) fn parse_curve(
                 c.duplicates += 1;
                 continue;
             }
+        }
+        if c.lines.len() == MAX_CURVE_ROWS {
+            return Err(err(
+                line,
+                format!("the curve has more than {MAX_CURVE_ROWS} points (rows of distinct elongation); decimate it (a fit thins a curve above {MAX_CURVE_POINTS} points to the points that follow it within 0.1 % of its force range)"),
+            ));
         }
         c.elongation_mm.push(v[0]);
         c.force_n.push(v[1]);

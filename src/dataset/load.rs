@@ -3,10 +3,13 @@
 
 use super::curve::{parse_curve, Curve};
 use super::known::read_known;
+use super::thin::{thin, THINNING_TOLERANCE};
 use super::{
     line_of, shape, BendTest, DatasetError, DatasetWarning, FabricDataset, RawBend, RawDataset,
-    RawTensile, Role, TensileTest, Toml, DEFAULT_DRAPE_ANGLE_DEG,
+    RawTensile, Role, TensileTest, Toml, AREAL_DENSITY_RANGE_G_M2, DEFAULT_DRAPE_ANGLE_DEG,
 };
+use crate::limits::{MAX_CURVE_POINTS, MAX_DATASET_TESTS};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -131,7 +134,25 @@ impl Folder<'_> {
 struct Log {
     warnings: Vec<DatasetWarning>,
     notes: Vec<String>,
-    used: Vec<(PathBuf, usize)>,
+    used: HashMap<PathBuf, usize>,
+}
+
+/// Refuses a dataset of more than [`MAX_DATASET_TESTS`] tests, at the first table beyond it.
+fn check_test_count(t: &Toml, raw: &RawDataset) -> Result<(), DatasetError> {
+    let count = raw.tensile.len() + raw.bend.len() + raw.shape.len();
+    if count <= MAX_DATASET_TESTS {
+        return Ok(());
+    }
+    let mut starts: Vec<usize> = (raw.tensile.iter().map(|x| x.span().start))
+        .chain(raw.bend.iter().map(|x| x.span().start))
+        .chain(raw.shape.iter().map(|x| x.span().start))
+        .collect();
+    starts.sort_unstable();
+    let first_over = starts[MAX_DATASET_TESTS];
+    Err(t.err(
+        first_over..first_over,
+        format!("{count} tests ([[tensile]], [[bend]] and [[shape]] tables) are more than the {MAX_DATASET_TESTS} a dataset may hold (this is the first beyond it); split the dataset"),
+    ))
 }
 
 /// As [`load_dataset`]; with `allow_outside`, curve paths may also be absolute, climb out of the
@@ -151,10 +172,8 @@ pub fn load_dataset_with(
         line: e.span().map(|s| line_of(&text, s.start)),
         message: e.message().trim().replace('\n', " "),
     })?;
-    let t = Toml {
-        text: &text,
-        file: &file,
-    };
+    let t = Toml::new(&text, &file);
+    check_test_count(&t, &raw)?;
     let folder = Folder {
         dir: path.parent().unwrap_or(Path::new("")),
         allow_outside,
@@ -162,7 +181,7 @@ pub fn load_dataset_with(
     let mut log = Log::default();
     let thickness = t.positive("", "thickness_mm", &raw.thickness_mm, 1e-3)?;
     let areal_density = match &raw.areal_density_g_m2 {
-        Some(v) => Some(t.positive("", "areal_density_g_m2", v, 1e-3)?),
+        Some(v) => Some(read_areal_density(&t, v)?),
         None => None,
     };
     let known = read_known(&t, raw.known.as_ref())?;
@@ -219,6 +238,24 @@ pub fn load_dataset_with(
     ))
 }
 
+/// `areal_density_g_m2` in kg/m²: finite and within [`AREAL_DENSITY_RANGE_G_M2`] (a value
+/// far outside it is a typing or unit slip that would surface later as a failed cantilever).
+fn read_areal_density(t: &Toml, v: &Spanned<f64>) -> Result<f64, DatasetError> {
+    let rho = t.positive("", "areal_density_g_m2", v, 1e-3)?;
+    let (lo, hi) = AREAL_DENSITY_RANGE_G_M2;
+    let g_m2 = *v.get_ref();
+    if !(lo..=hi).contains(&g_m2) {
+        return Err(t.err(
+            v.span(),
+            format!(
+                "areal_density_g_m2 must be in [{lo}, {hi}] g/m² (fabrics weigh about 10 to 1000), got {}: is it in g/m²?",
+                crate::io::num(g_m2)
+            ),
+        ));
+    }
+    Ok(rho)
+}
+
 /// Reads one `[[tensile]]` entry (number `i` from 0) and its curve file.
 fn read_tensile(
     t: &Toml,
@@ -268,8 +305,9 @@ fn read_tensile(
             .iter()
             .any(|w| w.message.contains("are the forces in kN?"));
     curve_notes(&c, &csv_name, force_scale, &mut log.notes);
-    let line = line_of(t.text, r.curve.span().start);
-    if let Some((_, first)) = log.used.iter().find(|(p, _)| *p == curve) {
+    let line = t.line(r.curve.span().start);
+    thin_long_curve(&mut c, &what, &csv_name, t.file, line, log);
+    if let Some(first) = log.used.get(&curve) {
         log.warnings.push(DatasetWarning {
             file: t.file.to_string(),
             line: Some(line),
@@ -279,7 +317,7 @@ fn read_tensile(
             ),
         });
     } else {
-        log.used.push((curve.clone(), line));
+        log.used.insert(curve.clone(), line);
     }
     let mut test = TensileTest::new(
         angle_deg,
@@ -295,6 +333,53 @@ fn read_tensile(
     test.columns = columns;
     test.suspect_kn = suspect_kn;
     Ok(test)
+}
+
+/// Thins a curve of more than [`MAX_CURVE_POINTS`] points to those that follow it within
+/// [`THINNING_TOLERANCE`] of its force range, with a warning (the test's `line` in `file`) and
+/// a note saying how many were kept.
+fn thin_long_curve(
+    c: &mut Curve,
+    what: &str,
+    csv_name: &str,
+    file: &str,
+    line: usize,
+    log: &mut Log,
+) {
+    let n = c.lines.len();
+    if n <= MAX_CURVE_POINTS {
+        return;
+    }
+    let (lo, hi) = c
+        .force_n
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+            (lo.min(f), hi.max(f))
+        });
+    let keep = thin(&c.elongation_mm, &c.force_n, THINNING_TOLERANCE * (hi - lo));
+    let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+    c.elongation_mm = pick(&c.elongation_mm);
+    c.force_n = pick(&c.force_n);
+    c.lines = keep.iter().map(|&i| c.lines[i]).collect();
+    let pct = 100.0 * THINNING_TOLERANCE;
+    let mut message = format!(
+        "{what}curve {csv_name} has {n} points, more than the {MAX_CURVE_POINTS} a fit takes as they are: thinned to the {} points that follow it within {pct} % of its force range",
+        keep.len()
+    );
+    if keep.len() > MAX_CURVE_POINTS {
+        message.push_str(&format!(
+            " (its scatter exceeds {pct} % of the force range, so many remain and the fit is slow: average or smooth the curve)"
+        ));
+    }
+    log.notes.push(format!(
+        "{csv_name}: {n} points thinned to {} (within {pct} % of the force range)",
+        keep.len()
+    ));
+    log.warnings.push(DatasetWarning {
+        file: file.to_string(),
+        line: Some(line),
+        message,
+    });
 }
 
 /// A tensile test's `columns`: the names of its elongation and force columns, when given.
@@ -399,7 +484,7 @@ fn read_bend(
             log.notes.push(format!("warning: {message}"));
             log.warnings.push(DatasetWarning {
                 file: t.file.to_string(),
-                line: Some(line_of(t.text, spanned.span().start)),
+                line: Some(t.line(spanned.span().start)),
                 message,
             });
             DEFAULT_DRAPE_ANGLE_DEG

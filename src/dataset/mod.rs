@@ -29,8 +29,14 @@
 //!
 //! Errors name the file and line: TOML syntax, missing or unknown keys, a missing or malformed
 //! curve, a non-increasing elongation, a negative or non-finite value, a non-positive width,
-//! gauge length, overhang, thickness or areal density, a bend test without areal density, an
-//! angle outside [0°, 180°), a drape angle outside (0°, 90°), a curve without data rows.
+//! gauge length, overhang, thickness or areal density, an areal density outside
+//! [`AREAL_DENSITY_RANGE_G_M2`], a bend test without areal density, an angle outside
+//! [0°, 180°), a drape angle outside (0°, 90°), a curve without data rows, more tests than
+//! [`crate::limits::MAX_DATASET_TESTS`], a curve of more points than
+//! [`crate::limits::MAX_CURVE_ROWS`].
+//!
+//! A curve of more than [`crate::limits::MAX_CURVE_POINTS`] points is thinned to those that
+//! follow it within [`THINNING_TOLERANCE`] of its force range (see `thin`), with a warning.
 //!
 //! Warnings (legal but suspicious): a curve with one point; a strain above 100 %; forces that
 //! look like kN: the largest force is below 10 N per metre of width (0.5 N on a 50 mm strip)
@@ -41,6 +47,7 @@ mod curve;
 mod known;
 mod load;
 mod shape;
+mod thin;
 mod write;
 
 pub use load::{load_dataset, load_dataset_with};
@@ -49,11 +56,16 @@ pub use shape::{Descriptor, ShapeScene, ShapeTest};
 use std::fmt;
 use std::ops::Range;
 use std::path::PathBuf;
+pub use thin::THINNING_TOLERANCE;
 use toml::Spanned;
 pub use write::{curve_csv, dataset_toml, write_dataset, write_dataset_with_comment};
 
 /// The drape angle of ASTM D1388 (tan⁻¹ 0.5 ≈ 26.6° is the other convention; we use 41.5°).
 pub const DEFAULT_DRAPE_ANGLE_DEG: f64 = 41.5;
+
+/// Areal densities a dataset may give, g/m²: from the lightest nonwovens and tissues to the
+/// heaviest canvases and carpets, with room on both sides.
+pub const AREAL_DENSITY_RANGE_G_M2: (f64, f64) = (1.0, 5000.0);
 
 /// Tensile angles the staged fit uses (weft, bias, warp); others are validation tests.
 pub const FITTED_ANGLES_DEG: [f64; 3] = [0.0, 45.0, 90.0];
@@ -295,13 +307,36 @@ fn line_of(text: &str, at: usize) -> usize {
 struct Toml<'a> {
     text: &'a str,
     file: &'a str,
+    /// byte offsets of the text's newlines, so that a line is found by bisection (a dataset
+    /// of many tables is read in time linear in its size)
+    newlines: Vec<usize>,
 }
 
-impl Toml<'_> {
+impl<'a> Toml<'a> {
+    fn new(text: &'a str, file: &'a str) -> Self {
+        let newlines = text.match_indices('\n').map(|(i, _)| i).collect();
+        Toml {
+            text,
+            file,
+            newlines,
+        }
+    }
+
+    /// As [`line_of`] on the text.
+    fn line(&self, at: usize) -> usize {
+        let at = at.min(self.text.len());
+        let skip = self.text.get(at..).map_or(0, |rest| {
+            let trimmed = rest.trim_start();
+            rest.len() - trimmed.len()
+        });
+        let end = (at + skip).min(self.text.len());
+        self.newlines.partition_point(|&p| p < end) + 1
+    }
+
     fn err(&self, span: Range<usize>, message: String) -> DatasetError {
         DatasetError {
             file: self.file.to_string(),
-            line: Some(line_of(self.text, span.start)),
+            line: Some(self.line(span.start)),
             message,
         }
     }

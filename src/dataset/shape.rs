@@ -17,7 +17,7 @@
 //! mesh = 12                 # optional: the model's mesh, faces each way
 //! ```
 
-use super::{line_of, DatasetError, Role, Toml};
+use super::{DatasetError, Role, Toml};
 use crate::shape::ShapeMesh;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -305,7 +305,7 @@ fn read_target(
         if let Err(why) = crate::shape::fft::resample(&target, 4) {
             return Err(DatasetError {
                 file: t.file.to_string(),
-                line: Some(line_of(t.text, obj.span().start)),
+                line: Some(t.line(obj.span().start)),
                 message: format!(
                     "{what}the fft descriptor needs material coordinates: {name}: {why}"
                 ),

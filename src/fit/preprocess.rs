@@ -233,6 +233,21 @@ fn max_force(t: &TensileTest) -> f64 {
     t.force.iter().cloned().fold(f64::MIN, f64::max)
 }
 
+/// The repeat number (from 1) of the next test at `angle`, given each angle met so far
+/// (within 1e-9°) with its count of tests: one pass over the tests, not one per test.
+fn repeat_number(seen: &mut Vec<(f64, usize)>, angle: f64) -> usize {
+    match seen.iter_mut().find(|(a, _)| (*a - angle).abs() < 1e-9) {
+        Some((_, n)) => {
+            *n += 1;
+            *n
+        }
+        None => {
+            seen.push((angle, 1));
+            1
+        }
+    }
+}
+
 /// Prepares every tensile curve: roles (`paper`: the paper's 0/45/90 split), repeats used,
 /// toes, points, and the strips with `n_nodes` nodes each.
 pub fn prepare(
@@ -244,6 +259,7 @@ pub fn prepare(
 ) -> Result<Prepared, FitError> {
     let mut notes = Vec::new();
     let mut curves = Vec::new();
+    let mut seen: Vec<(f64, usize)> = Vec::new();
     for (i, t) in data.tensile.iter().enumerate() {
         let name = t.curve.display();
         if t.suspect_kn {
@@ -294,10 +310,7 @@ pub fn prepare(
                 }
             ));
         }
-        let repeat = 1 + data.tensile[..i]
-            .iter()
-            .filter(|u| (u.angle_deg - t.angle_deg).abs() < 1e-9)
-            .count();
+        let repeat = repeat_number(&mut seen, t.angle_deg);
         curves.push(Curve {
             test: i,
             angle_deg: t.angle_deg,

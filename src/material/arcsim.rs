@@ -76,7 +76,8 @@ pub fn export(
 ) -> Result<(ArcsimMaterial, Vec<String>), String> {
     if !(max_strain > 0.0 && max_strain <= ROW_STRETCH - 1.0) {
         return Err(format!(
-            "the strain range must be in (0, 1/6], got {max_strain}"
+            "the strain range must be in (0, 1/6], got {}",
+            crate::io::num(max_strain)
         ));
     }
     let tau = m.thickness;

@@ -52,6 +52,7 @@
 //! arrays of different lengths and α = 0 are errors that name the file, the line and the key.
 
 use super::{BendingRigidity, Cutoffs, Eta, Orthotropic, OrthotropicStvk};
+use crate::limits::MAX_LAW_TERMS;
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -330,8 +331,8 @@ fn read_a12(e: &Errs, a12_pa: Option<f64>, a11: f64, a22: f64) -> Result<f64, Ma
     Ok(a12)
 }
 
-/// The η of the table `[table]` (linear when absent): mu and alpha of one length, finite, no
-/// zero alpha, mu summing to 1.
+/// The η of the table `[table]` (linear when absent): mu and alpha of one length, at most
+/// [`MAX_LAW_TERMS`] terms, finite, no zero alpha, mu summing to 1.
 fn read_eta(e: &Errs, table: &str, raw: Option<RawEta>) -> Result<Eta, MaterialFileError> {
     let Some(r) = raw else {
         return Ok(Eta::linear());
@@ -344,6 +345,16 @@ fn read_eta(e: &Errs, table: &str, raw: Option<RawEta>) -> Result<Eta, MaterialF
                 "[{table}] needs mu and alpha of the same, non-zero length (got {} and {})",
                 r.mu.len(),
                 r.alpha.len()
+            ),
+        ));
+    }
+    if r.mu.len() > MAX_LAW_TERMS {
+        return Err(e.err(
+            Some(table),
+            "mu",
+            format!(
+                "[{table}] has {} terms, more than the {MAX_LAW_TERMS} a law may have (a fit uses at most 8; every term is evaluated at every quadrature point of every solve)",
+                r.mu.len()
             ),
         ));
     }

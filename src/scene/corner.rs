@@ -80,7 +80,7 @@ impl CornerPull {
         if !(self.stretch.is_finite() && self.stretch > 0.0 && self.stretch < 1.0) {
             return Err(SceneError::Input(format!(
                 "stretch must be in (0, 1), got {}",
-                self.stretch
+                crate::io::num(self.stretch)
             )));
         }
         super::positive("clip", self.clip)?;

@@ -87,7 +87,8 @@ impl Drape {
         if !(self.span.is_finite() && self.span > 0.0 && self.span <= self.side) {
             return Err(SceneError::Input(format!(
                 "the corners' span must be in (0, side], got {} m for a {} m sheet",
-                self.span, self.side
+                crate::io::num(self.span),
+                crate::io::num(self.side)
             )));
         }
         Ok(())

@@ -111,7 +111,7 @@ impl PictureFrame {
         if !(self.shear_deg.is_finite() && self.shear_deg.abs() < 89.0) {
             return Err(SceneError::Input(format!(
                 "shear angle must be within ±89°, got {}",
-                self.shear_deg
+                crate::io::num(self.shear_deg)
             )));
         }
         Ok(())

@@ -107,7 +107,8 @@ fn build_model(
     if !grading.is_valid() {
         return Err(SceneError::Input(format!(
             "mesh grading must be in [0, 1) each way, got {} across and {} along",
-            grading.across, grading.along
+            crate::io::num(grading.across),
+            crate::io::num(grading.along)
         )));
     }
     if !angle_deg.is_finite() {

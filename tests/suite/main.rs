@@ -6,6 +6,7 @@
 mod basis;
 mod batch;
 mod benchmarks;
+mod bounds;
 mod cantilever;
 mod cli;
 mod common;

@@ -22,7 +22,8 @@ fn bend_tol(args: &SceneArgs) -> Result<f64, String> {
         Ok(tol)
     } else {
         Err(format!(
-            "--tol must be a positive number of degrees, got {tol}"
+            "--tol must be a positive number of degrees, got {}",
+            kshell::io::num(tol)
         ))
     }
 }
@@ -34,7 +35,8 @@ pub fn tensile_tol(args: &SceneArgs) -> Result<f64, String> {
         Ok(tol)
     } else {
         Err(format!(
-            "--tol must be a relative force error in (0, 1) (0.003 is 0.3 %), got {tol}"
+            "--tol must be a relative force error in (0, 1) (0.003 is 0.3 %), got {}",
+            kshell::io::num(tol)
         ))
     }
 }

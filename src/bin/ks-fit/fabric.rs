@@ -4,7 +4,7 @@
 use crate::guard::Guard;
 use kshell::dataset::FabricDataset;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
-use kshell::io::{cell, num};
+use kshell::io::{cell, shown};
 use std::path::{Path, PathBuf};
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.
@@ -242,7 +242,7 @@ pub fn cmd_check(a: &CheckArgs) -> Result<(), String> {
         ("poisson_12", k.poisson_12),
     ] {
         if let Some(v) = v {
-            info.push(format!("known: {name} = {} (held by the fit)", num(v)));
+            info.push(format!("known: {name} = {} (held by the fit)", shown(v)));
         }
     }
     let fitted_at = |a: f64| {
@@ -282,12 +282,12 @@ fn print_dataset(file: &Path, data: &FabricDataset) {
     println!("dataset: {}", file.display());
     println!("name: {}", data.name);
     match data.areal_density {
-        Some(rho) => println!("areal density: {} g/m²", num(rho * 1e3)),
+        Some(rho) => println!("areal density: {} g/m²", shown(rho * 1e3)),
         None => println!("areal density: not given"),
     }
     println!(
         "thickness: {} mm (measured; the fit's initial guess)",
-        num(data.thickness * 1e3)
+        shown(data.thickness * 1e3)
     );
     println!(
         "tests: {} tensile, {} bend",
@@ -314,6 +314,15 @@ fn print_tensile(
     prep: &Result<kshell::fit::preprocess::Prepared, kshell::fit::FitError>,
     info: &mut Vec<String>,
 ) {
+    // each test's prepared curve, found by its index (one pass, not one search per test)
+    let mut prepared = vec![None; data.tensile.len()];
+    if let Ok(p) = prep {
+        for c in &p.curves {
+            if let Some(slot) = prepared.get_mut(c.test) {
+                *slot = Some(c);
+            }
+        }
+    }
     for (i, t) in data.tensile.iter().enumerate() {
         let max_force = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let max_elong = t.elongation.last().copied().unwrap_or(0.0);
@@ -328,28 +337,22 @@ fn print_tensile(
                 t.curve.display()
             ));
         }
-        let toe = match prep {
-            Ok(p) => p
-                .curves
-                .iter()
-                .find(|c| c.test == i)
-                .filter(|c| c.toe != 0.0)
-                .map(|c| {
-                    format!(
-                        ", toe {:.3} mm {}",
-                        c.toe * 1e3,
-                        if c.toe_auto { "detected" } else { "given" }
-                    )
-                })
-                .unwrap_or_default(),
-            Err(_) => String::new(),
-        };
+        let toe = prepared[i]
+            .filter(|c| c.toe != 0.0)
+            .map(|c| {
+                format!(
+                    ", toe {:.3} mm {}",
+                    c.toe * 1e3,
+                    if c.toe_auto { "detected" } else { "given" }
+                )
+            })
+            .unwrap_or_default();
         println!(
             "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} ({}{toe})",
             "tensile",
             t.angle_deg,
-            num(t.width * 1e3),
-            num(t.gauge_length * 1e3),
+            shown(t.width * 1e3),
+            shown(t.gauge_length * 1e3),
             t.elongation.len(),
             cell(max_elong * 1e3, 4),
             cell(max_force, 4),
@@ -379,8 +382,8 @@ fn print_bends(data: &FabricDataset, info: &mut Vec<String>) {
             "{:<8} {:>7} {:>9} {:>16} {:>7} {:>14} {:>12}  {role} (drape {}°)",
             "bend",
             b.angle_deg,
-            num(b.width * 1e3),
-            num(b.overhang * 1e3),
+            shown(b.width * 1e3),
+            shown(b.overhang * 1e3),
             "-",
             "-",
             "-",

@@ -179,8 +179,47 @@ fn run(command: Command, force: bool) -> Result<bool, String> {
     }
 }
 
+/// What clap refused, as ks-fit says it: one line `ks-fit: error: …` (clap's message, its
+/// lines joined), then clap's tips and usage, each on a line of its own; exit code 2. Help and
+/// version print as clap prints them, with exit code 0.
+fn clap_refusal(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => e.exit(),
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            eprintln!("ks-fit: error: a command is missing; its help follows");
+            eprint!("{}", e.render());
+            return ExitCode::from(2);
+        }
+        _ => {}
+    }
+    let text = e.render().to_string();
+    let mut lines = text.lines().map(str::trim);
+    let mut message: Vec<&str> = Vec::new();
+    for l in lines.by_ref() {
+        if l.is_empty() {
+            break;
+        }
+        message.push(l.strip_prefix("error:").map_or(l, str::trim_start));
+    }
+    eprintln!("ks-fit: error: {}", message.join(" "));
+    for l in lines.filter(|l| !l.is_empty()) {
+        eprintln!("ks-fit: {l}");
+    }
+    ExitCode::from(2)
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return clap_refusal(e),
+    };
+    if cli.max_faces == 0 {
+        eprintln!(
+            "ks-fit: error: --max-faces must be at least 1 (a mesh has one face or more), got 0"
+        );
+        return ExitCode::from(2);
+    }
     kshell::solve::deterministic_factorizations();
     kshell::limits::set_max_faces(cli.max_faces);
     let draws = matches!(

@@ -106,7 +106,7 @@ fn sheet_test(a: &RecommendArgs) -> Result<LabTest, String> {
             if !(a.shear_deg.is_finite() && a.shear_deg.abs() <= 80.0) {
                 return Err(format!(
                     "--shear-deg must be within ±80 degrees, got {}",
-                    a.shear_deg
+                    kshell::io::num(a.shear_deg)
                 ));
             }
             Ok(LabTest::Frame {
@@ -118,7 +118,7 @@ fn sheet_test(a: &RecommendArgs) -> Result<LabTest, String> {
             if !(a.stretch > 0.0 && a.stretch <= 50.0) {
                 return Err(format!(
                     "--stretch must be a percentage in (0, 50], got {}",
-                    a.stretch
+                    kshell::io::num(a.stretch)
                 ));
             }
             Ok(LabTest::Corner {
@@ -227,7 +227,10 @@ fn qoi_text(test: &LabTest) -> String {
 /// Runs `ks-fit recommend`; `Ok(false)` when no run meets the tolerance.
 pub fn cmd_recommend(a: &RecommendArgs) -> Result<bool, String> {
     if !(a.tol > 0.0 && a.tol < 1.0) {
-        return Err(format!("--tol must be in (0, 1), got {}", a.tol));
+        return Err(format!(
+            "--tol must be in (0, 1), got {}",
+            kshell::io::num(a.tol)
+        ));
     }
     let repeats = a.repeats.unwrap_or(if a.scene == "drape" { 1 } else { 3 });
     if repeats == 0 || repeats > 100 {

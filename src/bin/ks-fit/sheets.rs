@@ -159,7 +159,7 @@ impl ShowScene {
     fn check(&self) -> Result<(), String> {
         let a = self.args();
         if !(a.tol.is_finite() && a.tol > 0.0 && a.tol < 1.0) {
-            return Err(format!("--tol must be in (0, 1), got {}", a.tol));
+            return Err(format!("--tol must be in (0, 1), got {:?}", a.tol));
         }
         if a.steps == 0 || a.steps > 1000 {
             return Err(format!("--steps must be 1 to 1000, got {}", a.steps));
@@ -169,11 +169,11 @@ impl ShowScene {
                 if !(shear_deg.is_finite() && shear_deg.abs() <= 80.0) =>
             {
                 Err(format!(
-                    "--shear-deg must be within ±80 degrees, got {shear_deg}"
+                    "--shear-deg must be within ±80 degrees, got {shear_deg:?}"
                 ))
             }
             ShowScene::CornerPull { stretch, .. } if !(*stretch > 0.0 && *stretch <= 50.0) => Err(
-                format!("--stretch must be a percentage in (0, 50], got {stretch}"),
+                format!("--stretch must be a percentage in (0, 50], got {stretch:?}"),
             ),
             _ => Ok(()),
         }

@@ -3,6 +3,8 @@
 //! are `ks-fit fit` options (`model`, `max_degree`, …; an empty cell keeps the default). And
 //! the fingerprint of a row's inputs, by which a finished fabric is recognised on a rerun.
 
+use kshell::limits::MAX_BATCH_ROWS;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// Manifest columns passed to `ks-fit fit` as `--name value` (underscores become hyphens).
@@ -118,24 +120,31 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Row>, String> {
         }
     }
     let mut rows: Vec<Row> = Vec::new();
+    // each fabric's line, to find a repeated name in one pass
+    let mut lines: HashMap<String, usize> = HashMap::new();
     for record in reader.records() {
         let record = record.map_err(|e| {
             let line = e.position().map_or(0, |p| p.line());
             format!("{name}:{line}: {e}")
         })?;
         let line = record.position().map_or(0, |p| p.line()) as usize;
+        if rows.len() == MAX_BATCH_ROWS {
+            return Err(format!(
+                "{name}:{line}: more than {MAX_BATCH_ROWS} fabrics in one manifest; split it into several batches"
+            ));
+        }
         let fab = record[fabric].to_string();
         if !valid_name(&fab) {
             return Err(format!(
                 "{name}:{line}: fabric `{fab}` is not a folder name (letters, digits, '.', '_' and '-', not starting with '.')"
             ));
         }
-        if let Some(first) = rows.iter().find(|r| r.fabric == fab) {
+        if let Some(first) = lines.get(&fab) {
             return Err(format!(
-                "{name}:{line}: fabric `{fab}` is already on line {}",
-                first.line
+                "{name}:{line}: fabric `{fab}` is already on line {first}"
             ));
         }
+        lines.insert(fab.clone(), line);
         if record[dataset].is_empty() {
             return Err(format!("{name}:{line}: fabric `{fab}` has no dataset"));
         }

@@ -8,16 +8,19 @@
 //! `log.txt` (everything the fit printed) and `status.toml` (done or failed, the exit code, the
 //! error, the seconds, and the fingerprint of its inputs). A rerun skips every fabric whose
 //! status is done with the same fingerprint, and runs failed and changed ones again.
-//! `OUT/summary.csv` and `OUT/index.html` are rewritten (atomically) as fabrics finish.
+//! `OUT/summary.csv` and `OUT/index.html` are rewritten (atomically) as fabrics finish, at most
+//! every few seconds (`progress`), and when the batch ends.
 //!
 //! With `--jobs N` above 1 each fit runs on one thread (`RAYON_NUM_THREADS=1`); a fit's
 //! material is the same to the bit whatever its thread count, so the batch's materials do not
 //! depend on the job count or the scheduler.
 
 pub mod manifest;
+pub mod progress;
 pub mod summary;
 
 use manifest::{inputs_hash, read_manifest, Row};
+use progress::{time_left, Pace};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::Instant;
@@ -227,8 +230,8 @@ impl<'a> Board<'a> {
     }
 }
 
-/// Runs the chosen fabrics, `a.jobs` at a time, updating the board (and the summary files when
-/// `summary`) as each ends.
+/// Runs the chosen fabrics, `a.jobs` at a time, updating the board as each ends (and the
+/// summary files when `summary`, at the pace of [`Pace`]: the caller writes them at the end).
 fn run_all(
     exe: &Path,
     rows: &[Row],
@@ -240,7 +243,9 @@ fn run_all(
     use std::sync::atomic::{AtomicUsize, Ordering};
     enum Msg {
         Started(usize),
-        Finished(usize, Status, bool),
+        /// the row, its status, whether it is skipped (done with unchanged inputs), its wall
+        /// time in seconds
+        Finished(usize, Status, bool, f64),
     }
     let next = AtomicUsize::new(0);
     let (tx, rx) = std::sync::mpsc::channel();
@@ -256,22 +261,25 @@ fn run_all(
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&i) = chosen.get(k) else { break };
                 let _ = tx.send(Msg::Started(i));
+                let t0 = Instant::now();
                 let (status, skipped) = run_fabric(exe, &rows[i], &a.out, single);
-                let _ = tx.send(Msg::Finished(i, status, skipped));
+                let wall = t0.elapsed().as_secs_f64();
+                let _ = tx.send(Msg::Finished(i, status, skipped, wall));
             });
         }
         drop(tx);
-        let (mut finished, mut fitted_seconds, mut fitted, mut failed) =
-            (0usize, 0.0, 0usize, 0usize);
+        let (mut finished, mut failed) = (0usize, 0usize);
+        // wall times of the fabrics run (not skipped), for the estimate of the time left
+        let mut walls: Vec<f64> = Vec::new();
+        let mut pace = Pace::new(Instant::now());
         for msg in rx {
             match msg {
                 Msg::Started(i) => board.running[i] = true,
-                Msg::Finished(i, status, skipped) => {
+                Msg::Finished(i, status, skipped, wall) => {
                     board.running[i] = false;
                     finished += 1;
                     if !skipped {
-                        fitted += 1;
-                        fitted_seconds += status.seconds;
+                        walls.push(wall);
                     }
                     let what = match (skipped, status.is_done(), status.passed) {
                         (true, ..) => "skipped (done before, inputs unchanged)".to_string(),
@@ -286,16 +294,8 @@ fn run_all(
                     };
                     failed += usize::from(!status.is_done());
                     board.status[i] = Some(status);
-                    let left = chosen.len() - finished;
-                    let eta = if fitted > 0 && left > 0 {
-                        let each = fitted_seconds / fitted as f64;
-                        format!(
-                            ", about {} left",
-                            duration(each * left as f64 / jobs as f64)
-                        )
-                    } else {
-                        String::new()
-                    };
+                    let pace = start.elapsed().as_secs_f64() / finished as f64;
+                    let eta = time_left(&walls, chosen.len() - finished, jobs, pace);
                     eprintln!(
                         "ks-fit: batch: {} {what}; {finished} of {} done ({failed} failed) after {:.0} s{eta}",
                         rows[i].fabric,
@@ -304,23 +304,14 @@ fn run_all(
                     );
                 }
             }
-            if summary {
+            if summary && pace.due(Instant::now()) {
+                let t0 = Instant::now();
                 board.write(&a.out, &a.manifest)?;
+                pace.wrote(Instant::now(), t0.elapsed());
             }
         }
         Ok(())
     })
-}
-
-/// "40 s", "12 min", "3.5 h".
-fn duration(seconds: f64) -> String {
-    if seconds < 120.0 {
-        format!("{seconds:.0} s")
-    } else if seconds < 7200.0 {
-        format!("{:.0} min", seconds / 60.0)
-    } else {
-        format!("{:.1} h", seconds / 3600.0)
-    }
 }
 
 /// Fits one fabric unless it is done with the same inputs; returns its status and whether it
