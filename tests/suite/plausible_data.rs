@@ -1,5 +1,6 @@
 //! `ks-fit fit` on plausible fabrics unlike the bundled five: a newcomer's first dataset of
-//! simple stiffening curves, and a law fixed at a degree whose stress falls past the tests.
+//! simple stiffening curves, a law fixed at a degree whose stress falls past the tests, and a
+//! soft-shear fabric whose bias strips carry less than half a newton.
 
 use crate::common::{folder, ks_fit, s};
 use std::path::{Path, PathBuf};
@@ -98,4 +99,69 @@ fn a_fixed_degree_whose_stress_falls_past_the_tests_is_cut_off_and_fitted() {
         assert!(s11 > last, "warp stress {s11} at {e} after {last}");
         last = s11;
     }
+}
+
+/// A soft-shear material: yarn-to-shear ratio max(a11, a22)/G12 = 2e4.
+const SOFT_SHEAR: &str = "name = \"soft-shear\"
+areal_density_g_m2 = 103.6
+thickness_mm = 0.18
+a11_pa = 2.0e8
+a22_pa = 1.2e8
+g12_pa = 1.0e4
+";
+
+#[test]
+fn soft_shear_bias_strips_are_warned_about_not_refused() {
+    let dir = folder("soft-shear");
+    let material = dir.join("material.toml");
+    std::fs::write(&material, SOFT_SHEAR).unwrap();
+    let data = dir.join("data");
+    let (rc, out, err) = ks_fit(&[
+        "synth",
+        "--material",
+        s(&material),
+        "--out",
+        s(&data),
+        "--points",
+        "8",
+        "--mesh",
+        "8x12",
+        "--grading",
+        "0.8,0.8",
+    ]);
+    assert_eq!(rc, 0, "{out}{err}");
+    // the bias strip carries less than the kN rule's 0.5 N on a 50 mm strip at 10 % strain
+    let (data_set, warnings) = kshell::dataset::load_dataset(&data.join("fabric.toml")).unwrap();
+    let fmax = |curve: &str| {
+        let t = data_set
+            .tensile
+            .iter()
+            .find(|t| t.curve.to_str() == Some(curve))
+            .unwrap();
+        t.force.iter().copied().fold(0.0, f64::max)
+    };
+    assert!(fmax("bias-1.csv") < 0.5, "{}", fmax("bias-1.csv"));
+    assert!(fmax("warp-1.csv") > 0.5, "{}", fmax("warp-1.csv"));
+    // warned about, and not refused
+    assert!(
+        warnings.iter().any(|w| w.message.contains("in kN?")),
+        "{warnings:?}"
+    );
+    assert!(data_set.tensile.iter().all(|t| !t.suspect_kn));
+    let (rc, out, _) = ks_fit(&["check", s(&data.join("fabric.toml"))]);
+    assert_eq!(rc, 0, "{out}");
+    assert!(out.contains("warning"), "{out}");
+    assert!(!out.contains("would refuse"), "{out}");
+    // the same bias curve alone, with nothing in newtons beside it, is still refused
+    let alone = dir.join("alone");
+    std::fs::create_dir_all(&alone).unwrap();
+    std::fs::copy(data.join("bias-1.csv"), alone.join("bias.csv")).unwrap();
+    std::fs::write(
+        alone.join("fabric.toml"),
+        "name = \"alone\"\nthickness_mm = 0.18\n[[tensile]]\nangle_deg = 45\nwidth_mm = 50\ngauge_length_mm = 75\ncurve = \"bias.csv\"\n[known]\na11_pa = 2.0e8\na22_pa = 1.2e8\n",
+    )
+    .unwrap();
+    let (rc, out, _) = ks_fit(&["check", s(&alone.join("fabric.toml"))]);
+    assert_eq!(rc, 0, "{out}");
+    assert!(out.contains("would refuse"), "{out}");
 }
