@@ -53,7 +53,7 @@ fn curve_warnings(
                 (0, f64::NEG_INFINITY),
                 |a, (i, f)| if f > a.1 { (i, f) } else { a },
             );
-    let floor = 0.01 * width_mm; // 10 N per metre of width
+    let floor = KN_FLOOR_N_PER_MM * width_mm;
     if max_strain > 0.01 && fmax < floor {
         out.push(warn(
             c.lines[imax],
@@ -76,6 +76,22 @@ fn curve_warnings(
             ),
         ));
     }
+}
+
+/// The largest force a tensile curve reaching 1 % strain should carry per mm of strip width
+/// (10 N per metre, 0.5 N on a 50 mm strip); below it the curve looks like kN.
+const KN_FLOOR_N_PER_MM: f64 = 0.01;
+
+/// Whether some tensile curve carries forces at or above the kN floor for its width: the
+/// dataset's forces are then newtons. A testing machine writes every curve of a fabric in
+/// one unit, and a fabric's curves differ by far more than the floor's margin: beside yarn
+/// strips of tens of newtons, the bias strips of a soft-shear fabric (yarn-to-shear ratio
+/// max(a11, a22)/G12 of 1e4 to 2.5e4) carry well under 0.5 N at 10 % strain.
+fn some_force_in_newtons(tests: &[TensileTest]) -> bool {
+    tests.iter().any(|t| {
+        let fmax = t.force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        !t.suspect_kn && fmax >= KN_FLOOR_N_PER_MM * t.width * 1e3
+    })
 }
 
 /// Largest curve file read (a million rows of a machine export are about 40 MB).
@@ -188,6 +204,11 @@ pub fn load_dataset_with(
     let mut tensile = Vec::with_capacity(raw.tensile.len());
     for (i, spanned) in raw.tensile.iter().enumerate() {
         tensile.push(read_tensile(&t, &folder, i, spanned.get_ref(), &mut log)?);
+    }
+    // a curve that looks like kN keeps its warning; the fit refuses it only when no curve
+    // of the dataset is plainly in newtons (see [`some_force_in_newtons`])
+    if some_force_in_newtons(&tensile) {
+        tensile.iter_mut().for_each(|t| t.suspect_kn = false);
     }
     let mut bend = Vec::with_capacity(raw.bend.len());
     for (i, spanned) in raw.bend.iter().enumerate() {

@@ -191,7 +191,8 @@ pub struct TensileTest {
     pub force_scale: f64,
     /// `columns` as written: the elongation and force columns' header names
     pub columns: Option<[String; 2]>,
-    /// the forces look like kN (tiny for the strip's width) and no `force_scale` is given
+    /// the forces look like kN (tiny for the strip's width), no `force_scale` is given and no
+    /// curve of the dataset carries forces plainly in newtons: the fit refuses the test
     pub suspect_kn: bool,
 }
 

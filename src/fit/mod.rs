@@ -46,6 +46,7 @@ mod bending;
 pub mod bootstrap;
 pub mod coupling;
 mod degrees;
+mod fallback;
 pub mod html;
 mod joint;
 mod journal;
@@ -100,6 +101,13 @@ pub enum FitError {
     Data(String),
     #[error("{stage}: {source}")]
     Scene { stage: String, source: SceneError },
+    /// a stage that failed to solve from its start and from every fallback, with what to try
+    #[error("{stage}: {source}; {hint}")]
+    Stage {
+        stage: String,
+        source: SceneError,
+        hint: String,
+    },
 }
 
 /// One test's outcome.

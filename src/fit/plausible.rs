@@ -62,6 +62,36 @@ pub fn stress_peak(eta: &Eta, e_max: f64) -> Option<f64> {
     (e_max > 0.0).then(|| eta.stress_peak(e_max)).flatten()
 }
 
+/// How far past the tested strain √x̂ a law's stress must keep rising for the shell to see
+/// it uncut, as a multiple of √x̂: strips reach more than their nominal strain at the jaws'
+/// corners, bias strips shear about twice the isotropic estimate, and Newton's iterates go
+/// further still.
+pub const PEAK_SEARCH: f64 = 4.0;
+
+/// Share of a stress peak's strain at which a cut-off below it lies.
+pub const BELOW_PEAK: f64 = 0.95;
+
+/// Whether η's stiffest term (the largest exponent, a positive one) has a negative weight:
+/// η' = Σ μᵢ(1 + x)^(αᵢ−1) then falls without bound as the strain grows, so the stress falls
+/// past some strain and the energy drops without bound there (a sink that draws Newton's
+/// iterates until the energy overflows).
+pub fn falls_eventually(eta: &Eta) -> bool {
+    let stiffest = (0..eta.degree()).max_by(|&a, &b| eta.alpha[a].total_cmp(&eta.alpha[b]));
+    stiffest.is_some_and(|i| eta.alpha[i] > 0.0 && eta.mu[i] < 0.0)
+}
+
+/// The cut-off a law needs for its stress to rise up to it and its energy to stay bounded
+/// (x̂: the largest tested value of η's argument): [`BELOW_PEAK`] of its stress peak within
+/// [`PEAK_SEARCH`] √x̂, else [`PEAK_SEARCH`] √x̂ itself where its stiffest term falls; `None`
+/// where the stress rises throughout.
+pub fn fall_cutoff(eta: &Eta, xhat: f64) -> Option<f64> {
+    let e_max = PEAK_SEARCH * xhat.sqrt();
+    match stress_peak(eta, e_max) {
+        Some(e) => Some(BELOW_PEAK * e),
+        None => falls_eventually(eta).then_some(e_max),
+    }
+}
+
 /// The fitter's side of the checks: which degree is plausible, the cut-offs below any stress
 /// peak, and where a new term starts.
 impl Fitter<'_> {
@@ -102,6 +132,34 @@ impl Fitter<'_> {
             self.journal.say(&note);
             self.journal.note(note);
         }
+    }
+}
+
+impl Fitter<'_> {
+    /// Cuts the law of `map`'s direction off at its [`fall_cutoff`] where it has one tighter
+    /// than its cut-offs, with a note; whether it did. Past the cut-off the law goes on along
+    /// its rising tangent, so the shell's energy stays finite wherever its strips stray.
+    pub(super) fn cut_before_fall(&mut self, map: StageMap) -> bool {
+        let law = &mut self.law;
+        let (eta, cut, name) = match map.dir {
+            Direction::Warp => (&law.warp, &mut law.cutoffs.e11, "Ẽ11"),
+            Direction::Weft => (&law.weft, &mut law.cutoffs.e22, "Ẽ22"),
+            Direction::Shear => (&law.shear, &mut law.cutoffs.e12, "|Ẽ12|"),
+        };
+        let Some(to) = fall_cutoff(eta, map.xhat) else {
+            return false;
+        };
+        if cut.0 >= -to && cut.1 <= to {
+            return false;
+        }
+        *cut = (cut.0.max(-to), cut.1.min(to));
+        let note = format!(
+            "the {} law's stress stops rising within {PEAK_SEARCH} times the tested strain (or its stiffest term falls past it): cut-off {name} at {to:.4}, past which the law goes on along its tangent",
+            map.dir.name()
+        );
+        self.journal.say(&note);
+        self.journal.note(note);
+        true
     }
 }
 
@@ -176,6 +234,61 @@ mod tests {
             alpha: vec![1.0],
         };
         assert_eq!(drop_negligible(&mut one, xhat), 0);
+    }
+
+    #[test]
+    fn a_law_whose_stiffest_term_falls_is_cut_off_below_its_peak() {
+        // the degree-2 warp law bootstrapped from F = k·e(1 + c·e) (k = 21 N/mm, c = 0.08/mm,
+        // 6 mm on a 75 mm gauge): it fits the curve, and its stress peaks at Ẽ11 ≈ 0.12
+        let xhat = (0.08f64 + 0.5 * 0.08 * 0.08).powi(2);
+        let warp = Eta {
+            mu: vec![1.0779676904322697, -0.07796769043226962],
+            alpha: vec![62.179602374951884, 244.86231627930988],
+        };
+        assert!(falls_eventually(&warp));
+        assert_eq!(
+            stress_peak(&warp, xhat.sqrt()),
+            None,
+            "rises over the tests"
+        );
+        let peak = stress_peak(&warp, PEAK_SEARCH * xhat.sqrt()).expect("a peak past them");
+        let cut = fall_cutoff(&warp, xhat).expect("a cut-off");
+        assert_eq!(cut, BELOW_PEAK * peak);
+        assert!(cut > xhat.sqrt() && cut < 0.2, "{cut}");
+        // far out the stiffest term dominates: η' < 0, the energy heads for −∞ and overflows
+        let [h, d1, _] = warp.eval(0.2).expect("finite at 45 % strain");
+        assert!(d1 < 0.0 && h < 0.0, "{h} {d1}");
+        assert_eq!(warp.eval(25.0), None);
+        // the same law cut off there stays finite and its stress rising everywhere
+        let mut law = crate::material::Orthotropic {
+            a11: 1.9e8,
+            a22: 1.2e8,
+            a12: 0.6e8,
+            g12: 6.5e6,
+            warp,
+            weft: Eta::linear(),
+            shear: Eta::linear(),
+            cutoffs: crate::material::Cutoffs::none(),
+            coupling: None,
+        };
+        law.cutoffs.e11 = (-cut, cut);
+        let s11 = |e: f64| {
+            let r = crate::material::Law::response(&law, &nalgebra::Vector3::new(e, 0.0, 0.0));
+            r.expect("finite").stress[0]
+        };
+        let mut last = 0.0;
+        for e in [0.01, 0.05, 0.08, 0.12, 0.5, 5.0] {
+            assert!(s11(e) > last, "stress at {e}: {} after {last}", s11(e));
+            last = s11(e);
+        }
+        // laws that stiffen throughout are left as they are
+        let stiff = Eta {
+            mu: vec![0.4, 0.6],
+            alpha: vec![8.5, 204.8],
+        };
+        assert!(!falls_eventually(&stiff));
+        assert_eq!(fall_cutoff(&stiff, xhat), None);
+        assert_eq!(fall_cutoff(&Eta::linear(), xhat), None);
     }
 
     #[test]

@@ -141,7 +141,16 @@ impl Fitter<'_> {
                 100.0 * candidate.2
             ));
             all.push(candidate.0.clone());
-            if fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2 {
+            let gains = fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2;
+            if gains && fixed.is_none() && self.yarn_law_falls(map, &candidate.0) {
+                self.log_degree(format!(
+                    "{}: degree {} kept: degree {degree} has a negative weight on its stiffest term, so its stress falls just past the tested strain (homogeneous strip)",
+                    map.dir.name(),
+                    degree - 1
+                ));
+                break;
+            }
+            if gains {
                 chosen = candidate;
             } else {
                 self.journal.degree(format!(
@@ -156,12 +165,24 @@ impl Fitter<'_> {
         (chosen.0, all)
     }
 
+    /// Whether the yarn law of `map` at the bootstrap's variables p falls eventually
+    /// ([`super::plausible::falls_eventually`]): its stress then falls a little past the
+    /// tested strain, where the shell's strips reach at the jaws' corners, and their solves
+    /// fail. The shear's degree is chosen again on the shell ([`super::degrees`]), where such
+    /// a raise that fails to solve keeps the lower degree.
+    fn yarn_law_falls(&self, map: StageMap, p: &[f64]) -> bool {
+        let mut law = self.law.clone();
+        map.decode(p, &mut law);
+        map.dir != Direction::Shear && super::plausible::falls_eventually(map.eta(&law))
+    }
+
     pub(super) fn log_degree(&mut self, line: String) {
         self.journal.say(&line);
         self.journal.degree(line);
     }
 
-    /// One tensile stage on the shell model at one mesh level, over the stage's strips;
+    /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
+    /// the current law alone (`shell_stage` falls back from it, see [`super::fallback`]);
     /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
     /// strain range the strips exercise there. On the first level the stage starts with
     /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
@@ -171,7 +192,7 @@ impl Fitter<'_> {
     /// mapped start, degree 2 gains −3 to 23 % of shape error, never the 30 % needed). A finer
     /// level's stage takes the mapped steps only where its own Gauss–Newton step promises them
     /// work (below).
-    pub(super) fn shell_stage(
+    pub(super) fn shell_stage_once(
         &mut self,
         map: StageMap,
         strips: &[usize],
@@ -516,6 +537,11 @@ pub(super) fn bootstrap_all(
                 .into(),
         ),
         _ => {}
+    }
+    // a yarn law whose stress stops rising a little past the tests (a `--degree` the
+    // bootstrap kept whatever it does, a softening degree 1) is cut off below that
+    for map in &maps[..2] {
+        f.cut_before_fall(*map);
     }
     f.a12.apply(&mut f.law);
     // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
