@@ -7,7 +7,7 @@
 //! The page is polyglot markup (well-formed XML as well as HTML5) and references nothing
 //! outside itself: no scripts, no style sheets, no fonts, no images by address.
 
-use super::report::{angle_svg, curve_angles, curves_at, table};
+use super::report::{angle_svg, angle_title, curve_angles, curves_at, table};
 use super::FitResult;
 use crate::material::material_toml;
 use std::fmt::Write;
@@ -55,9 +55,12 @@ pub fn base64(bytes: &[u8]) -> String {
     o
 }
 
-const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}\
+/// The page's style. The page fits a 1280-pixel window: the body is at most 1200 pixels wide,
+/// headers wrap, and the error table (sixteen columns) is set smaller.
+const STYLE: &str = "body{font-family:sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}\
 table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}\
-th{background:#f3f3f3}td.l,th.l{text-align:left}.pass{color:#176b1e}.fail{color:#b00020}\
+th{background:#f3f3f3;white-space:normal;vertical-align:bottom}table.errors{font-size:0.85em}table.errors td,table.errors th{padding:2px 4px}\
+td.l,th.l{text-align:left}.pass{color:#176b1e}.fail{color:#b00020}\
 pre{background:#f7f7f7;padding:0.6em;overflow-x:auto}figure{display:inline-block;margin:0.5em}\
 figure img{max-width:100%}.und{color:#777}";
 
@@ -181,10 +184,10 @@ fn tests_section(h: &mut String, r: &FitResult) {
     let judged = super::verdict::judge(r, r.max_error);
     let _ = writeln!(
         h,
-        "<h2>Errors per test</h2>\n<p>Mean |relative error| of each curve at its nominal angle; the error judged against --max-error {} % (a repeat's force scale outside the repeats' scatter band, a bend's drape angle) and the diagnostics beside it.</p>",
+        "<h2>Errors per test</h2>\n<p><b>error</b>: the raw mean |relative error| of each curve at its nominal angle (a repeat's force scale included); <b>judged error</b>, beside the verdict: the error judged against --max-error {} % (repeats fitted together: the larger of the scaled error and the fit's distance outside the repeats' scatter band; a bend: its drape angle's); the diagnostics between them.</p>",
         100.0 * r.max_error
     );
-    h.push_str("<table><tr><th class=\"l\">kind</th><th>angle</th><th class=\"l\">curve</th><th>repeat</th><th>error</th><th>scale</th><th>scaled error</th><th>judged error</th><th>drape angle (target)</th><th>misalign</th><th>aligned error</th><th>toe (mm)</th><th>mesh</th><th>mesh error</th><th>fitted</th><th>verdict</th></tr>\n");
+    h.push_str("<table class=\"errors\"><tr><th class=\"l\">kind</th><th>angle</th><th class=\"l\">curve</th><th>repeat</th><th>error</th><th>scale</th><th>scaled error</th><th>drape angle (target)</th><th>misalign</th><th>aligned error</th><th>toe (mm)</th><th>mesh</th><th>mesh error</th><th>fitted</th><th>judged error</th><th>verdict</th></tr>\n");
     for (t, j) in r.tests.iter().zip(&judged) {
         let class = match j.mark {
             "OVER" => " class=\"fail\"",
@@ -201,7 +204,6 @@ fn tests_section(h: &mut String, r: &FitResult) {
             pct(t.avg_rel_error),
             t.repeat_scale.map_or("-".into(), |k| format!("{k:.3}")),
             pct(t.avg_rel_error_scaled),
-            pct(j.error),
             match (t.drape_angle_deg, t.target_drape_deg) {
                 (Some(a), Some(g)) => format!("{a:.2}° ({g:.1}°)"),
                 _ => "-".into(),
@@ -212,6 +214,7 @@ fn tests_section(h: &mut String, r: &FitResult) {
             t.mesh.map_or("-".into(), |(a, b)| format!("{a}x{b}")),
             pct(t.mesh_error_est),
             if t.used_in_fit { "yes" } else { "validation" },
+            pct(j.error),
             j.mark
         );
     }
@@ -225,16 +228,12 @@ fn curves_section(h: &mut String, r: &FitResult) {
     }
     let _ = writeln!(
         h,
-        "<h2>Measured curves and the fit</h2>\n<p>Every repeat measured (dashed) against the fitted model (solid), one plot per cut angle.</p>"
+        "<h2>Measured curves and the fit</h2>\n<p>Every repeat measured (dashed) against the fitted model at its points (solid, in the repeat's colour), one plot per cut angle; each title gives the worst verdict at its angle and the largest judged error.</p>"
     );
+    let judged = super::verdict::judge(r, r.max_error);
     for a in angles {
         let at = curves_at(r, a);
-        let fitted = at.iter().any(|t| t.used_in_fit);
-        let title = format!(
-            "{a}°: {} repeat(s), {}",
-            at.len(),
-            if fitted { "fitted" } else { "validation" }
-        );
+        let title = angle_title(r, &judged, a);
         match angle_svg(&at, &title) {
             Ok(svg) => {
                 let _ = writeln!(h, "<figure>{}</figure>", inline_svg(&svg));

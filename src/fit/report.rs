@@ -5,6 +5,7 @@
 
 mod fit_file;
 
+use super::verdict::{judge, Judgement};
 use super::{FitResult, TestOutcome};
 use crate::io::num;
 pub use fit_file::fit_toml;
@@ -29,10 +30,15 @@ fn toml_key(k: &str) -> String {
     }
 }
 
-/// The per-test table printed at the end of a fit.
+/// What the table's two error columns mean, printed under it: the raw error that the paper's
+/// tables report and the error the verdict reads.
+pub const ERROR_KEY: &str = "errors: avg_rel_error is the raw mean |relative error| at the nominal angle (a repeat's force scale included); judged_error is what the verdict reads (repeats fitted together: the larger of scaled_error and the fit's distance outside their scatter band; a bend: |drape angle - target| / target)";
+
+/// The per-test table printed at the end of a fit: one row per test, its `verdict` mark and,
+/// beside it, the `judged_error` that decides the mark; then [`ERROR_KEY`] and the verdict.
 pub fn table(r: &FitResult) -> String {
     let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}\n",
+        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7} {:>12}\n",
         "kind",
         "angle",
         "curve",
@@ -46,32 +52,37 @@ pub fn table(r: &FitResult) -> String {
         "mesh",
         "mesh_err",
         "fitted",
-        "verdict"
+        "verdict",
+        "judged_error"
     );
-    let judged = super::verdict::judge(r, r.max_error);
+    let judged = judge(r, r.max_error);
     for (t, judgement) in r.tests.iter().zip(&judged) {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
         let _ = writeln!(
             s,
-            "{:<11} {:>7.1} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}",
+            "{:<11} {:>7.1} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7} {:>12}",
             t.kind,
             t.angle_deg,
             t.curve.as_deref().unwrap_or("-"),
-            opt(t.avg_rel_error, &|e| format!("{:.2} %", 100.0 * e)),
+            pct(t.avg_rel_error),
             opt(t.repeat_scale, &|k| format!("{k:.3}")),
-            opt(t.avg_rel_error_scaled, &|e| format!("{:.2} %", 100.0 * e)),
+            pct(t.avg_rel_error_scaled),
             match (t.drape_angle_deg, t.target_drape_deg) {
                 (Some(a), Some(g)) => format!("{a:.2} ({g:.1})"),
                 _ => "-".into(),
             },
             opt(t.misalign_deg, &|m| format!("{m:+.2}")),
-            opt(t.avg_rel_error_aligned, &|e| format!("{:.2} %", 100.0 * e)),
+            pct(t.avg_rel_error_aligned),
             opt(t.toe, &|m| format!("{:.3}", m * 1e3)),
             t.mesh.map_or("-".into(), |(a, b)| format!("{a}x{b}")),
-            opt(t.mesh_error_est, &|e| format!("{:.2} %", 100.0 * e)),
+            pct(t.mesh_error_est),
             if t.used_in_fit { "yes" } else { "no" },
             judgement.mark,
+            pct(judgement.error),
         );
+    }
+    if !r.tests.is_empty() {
+        let _ = writeln!(s, "{ERROR_KEY}");
     }
     let _ = writeln!(s, "{}", super::verdict::verdict(r, r.max_error).line);
     s
@@ -175,7 +186,12 @@ pub fn curve_svg(t: &TestOutcome, title: &str) -> Result<String, String> {
                 ))
                 .map_err(|e| e.to_string())?
                 .label("measured")
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
+                .legend(|(x, y)| {
+                    // two dashes: the swatch of a dashed line
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (8, 0)], BLACK)
+                        + PathElement::new(vec![(12, 0), (20, 0)], BLACK)
+                });
             chart
                 .draw_series(LineSeries::new(
                     fitted,
@@ -209,7 +225,7 @@ fn measured_at(points: &[(f64, f64, f64)], x: f64) -> Option<f64> {
 
 /// SVG of every repeat at one angle: the repeats' scatter band (grey, between the smallest and
 /// largest measured force where every repeat has data), each repeat measured (dashed) and the
-/// fit (solid, one line per strip geometry).
+/// fit at its points (solid, in the repeat's colour); the legend names every line.
 pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> {
     use plotters::prelude::*;
     let emax = tests
@@ -289,7 +305,12 @@ pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> 
                 ))
                 .map_err(|e| e.to_string())?
                 .label(format!("{name} measured"))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+                .legend(move |(x, y)| {
+                    // two dashes: the swatch of a dashed line
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (8, 0)], colour)
+                        + PathElement::new(vec![(12, 0), (20, 0)], colour)
+                });
             let fitted: Vec<(f64, f64)> = t
                 .points
                 .iter()
@@ -297,8 +318,10 @@ pub fn angle_svg(tests: &[&TestOutcome], title: &str) -> Result<String, String> 
                 .map(|p| (p.0 * 1e3, p.2))
                 .collect();
             chart
-                .draw_series(LineSeries::new(fitted, BLACK.stroke_width(1)))
-                .map_err(|e| e.to_string())?;
+                .draw_series(LineSeries::new(fitted, colour.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(format!("{name} fitted"))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
         chart
             .configure_series_labels()
@@ -333,11 +356,82 @@ pub(super) fn curves_at(r: &FitResult, a: f64) -> Vec<&TestOutcome> {
         .collect()
 }
 
+/// A percentage with two decimals, `-` where there is none.
+fn pct(v: Option<f64>) -> String {
+    v.map_or("-".into(), |e| format!("{:.2} %", 100.0 * e))
+}
+
+/// The title of one curve's plot: the test, its raw error, the error the verdict reads and
+/// the verdict's mark.
+pub(super) fn curve_title(t: &TestOutcome, j: &Judgement) -> String {
+    format!(
+        "{} {}°: raw error {}, judged {}, verdict {}",
+        t.kind,
+        t.angle_deg,
+        pct(t.avg_rel_error),
+        pct(j.error),
+        j.mark
+    )
+}
+
+/// How bad a verdict mark is, for the worst of several: `OVER`, then `high`, `ok`, `T3`, `-`.
+fn mark_rank(mark: &str) -> u8 {
+    match mark {
+        "OVER" => 4,
+        "high" => 3,
+        "ok" => 2,
+        "T3" => 1,
+        _ => 0,
+    }
+}
+
+/// The title of the plot of every repeat at cut angle `a`: how many, fitted or validation,
+/// and the worst verdict mark among them with the largest judged error (`judged` in the order
+/// of `r.tests`).
+pub(super) fn angle_title(r: &FitResult, judged: &[Judgement], a: f64) -> String {
+    let at: Vec<(&TestOutcome, &Judgement)> = r
+        .tests
+        .iter()
+        .zip(judged)
+        .filter(|(t, _)| t.angle_deg == a && !t.points.is_empty())
+        .collect();
+    let fitted = at.iter().any(|(t, _)| t.used_in_fit);
+    let mark = at
+        .iter()
+        .map(|(_, j)| j.mark)
+        .max_by_key(|m| mark_rank(m))
+        .unwrap_or("-");
+    let worst = at
+        .iter()
+        .filter_map(|(_, j)| j.error)
+        .fold(None, |m: Option<f64>, e| {
+            // a NaN error (a failed solve) is the worst, never skipped by `max`
+            Some(m.map_or(e, |m| {
+                if m.is_nan() || e.is_nan() {
+                    f64::NAN
+                } else {
+                    m.max(e)
+                }
+            }))
+        });
+    format!(
+        "{a}°: {} {}; verdict {mark} (judged error ≤ {})",
+        at.len(),
+        if fitted {
+            "fitted repeat(s)"
+        } else {
+            "validation run(s)"
+        },
+        pct(worst)
+    )
+}
+
 /// Writes `DIR/<kind>-<curve>.csv` and `.svg` for every tensile and validation test, and
 /// `DIR/summary.txt` with the table. Returns the files written.
 pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec<String>> {
     std::fs::create_dir_all(dir)?;
     let mut written = Vec::new();
+    let judged = judge(r, r.max_error);
     for (i, t) in r.tests.iter().enumerate() {
         if t.points.is_empty() {
             continue;
@@ -346,12 +440,7 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
         let csv = dir.join(format!("{stem}.csv"));
         crate::io::write_atomic(&csv, curve_csv(t))?;
         written.push(csv.display().to_string());
-        let title = format!(
-            "{} {}°: mean |relative error| {:.2} %",
-            t.kind,
-            t.angle_deg,
-            100.0 * t.avg_rel_error.unwrap_or(f64::NAN)
-        );
+        let title = curve_title(t, &judged[i]);
         if let Ok(svg) = curve_svg(t, &title) {
             let path = dir.join(format!("{stem}.svg"));
             crate::io::write_atomic(&path, svg)?;
@@ -361,7 +450,7 @@ pub fn write_report(r: &FitResult, dir: &std::path::Path) -> std::io::Result<Vec
     // one plot per angle with every repeat and their scatter band
     for a in curve_angles(r) {
         let at = curves_at(r, a);
-        let title = format!("{a}°: {} repeat(s), fit solid", at.len());
+        let title = angle_title(r, &judged, a);
         if let Ok(svg) = angle_svg(&at, &title) {
             let path = dir.join(format!("angle-{a}.svg"));
             crate::io::write_atomic(&path, svg)?;

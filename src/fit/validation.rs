@@ -101,13 +101,17 @@ impl Fitter<'_> {
                 prev = e;
             }
             let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
-            // on the mesh its nodes were solved on (a strip refined on its own is compared
-            // with itself, not with the ladder's mesh: that difference is mesh error)
+            // on the mesh and the discretisation its nodes were solved on (a strip refined on
+            // its own is compared with itself, not with the ladder's mesh, and a node rig set
+            // up on an earlier ladder level keeps that level's centre-rule β: either
+            // difference is discretisation error, not interpolation error)
             let own = self.strip_level(s, level);
+            let key = self.rig_key(s, strip.angle_deg, own);
+            let node_rig = self.lab.rigs.get(&key);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.opts.grading;
             t.yarn_rule = self.strip_yarns(strip.angle_deg);
-            t.yarn_ratio = self.lab.yarn_ratio;
+            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio, |r| r.yarn_ratio());
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
@@ -115,8 +119,7 @@ impl Fitter<'_> {
                 source,
             })?;
             // started between the node equilibria just solved with the same material
-            let key = self.rig_key(s, strip.angle_deg, own);
-            if let Some(nodes) = self.lab.rigs.get(&key) {
+            if let Some(nodes) = node_rig {
                 rig.warm_between(nodes);
             }
             checks.push((s, mids, rig));

@@ -185,6 +185,9 @@ impl TensileStrip {
             },
             wanted: None,
             retry_iterations: None,
+            yarn_ratio: self
+                .yarn_ratio
+                .or_else(|| crate::material::Law::yarn_shear_ratio(&material.law)),
         })
     }
 }
@@ -255,6 +258,9 @@ pub struct StripRig {
     params: Vec<f64>,
     /// which parameters' sensitivities to compute (all when `None`; the others come back 0)
     wanted: Option<Vec<bool>>,
+    /// the yarn-to-shear ratio the strip's discretisation is set up with (the centre rule's
+    /// β); it stays when the material changes
+    yarn_ratio: Option<f64>,
 }
 
 impl StripRig {
@@ -291,6 +297,12 @@ impl StripRig {
 
     pub fn elongations(&self) -> &[f64] {
         &self.elongations
+    }
+
+    /// The yarn-to-shear ratio that set up this strip's discretisation ([`TensileStrip`]'s
+    /// `yarn_ratio`, or its first law's): a strip built with it solves on the same one.
+    pub fn yarn_ratio(&self) -> Option<f64> {
+        self.yarn_ratio
     }
 
     /// Forces at every elongation; with `sensitivities`, also ∂force/∂k for the law's

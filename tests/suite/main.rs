@@ -27,6 +27,7 @@ mod polish;
 mod refinement;
 mod render;
 mod render_cli;
+mod report;
 mod scene_cli;
 mod scenes;
 mod sensitivities;
