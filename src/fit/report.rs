@@ -29,10 +29,11 @@ fn toml_key(k: &str) -> String {
     }
 }
 
-/// The per-test table printed at the end of a fit.
-pub fn table(r: &FitResult) -> String {
-    let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}\n",
+/// The first line of [`table`]: its column names. A report's `summary.txt` starts with it,
+/// which is how a folder is told to be an earlier report ([`is_report_summary`]).
+fn table_header() -> String {
+    format!(
+        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}",
         "kind",
         "angle",
         "curve",
@@ -47,7 +48,18 @@ pub fn table(r: &FitResult) -> String {
         "mesh_err",
         "fitted",
         "verdict"
-    );
+    )
+}
+
+/// Whether `text` (a `summary.txt`) is one that [`write_report`] wrote: its first line is the
+/// table's header. A folder holding a `summary.txt` that is not one is no earlier report.
+pub fn is_report_summary(text: &str) -> bool {
+    text.lines().next() == Some(table_header().as_str())
+}
+
+/// The per-test table printed at the end of a fit.
+pub fn table(r: &FitResult) -> String {
+    let mut s = table_header() + "\n";
     let judged = super::verdict::judge(r, r.max_error);
     for (t, judgement) in r.tests.iter().zip(&judged) {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());
