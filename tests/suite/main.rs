@@ -21,6 +21,7 @@ mod model_cli;
 mod off_axis;
 mod opensubdiv_oracle;
 mod orthotropic;
+mod outputs;
 mod polish;
 mod refinement;
 mod render;
