@@ -163,7 +163,7 @@ fn degenerate(p: &[Vec3], area: f64) -> Option<&'static str> {
     if diagonal == 0.0 {
         return Some("the shape has zero size (every face's corners at one point)");
     }
-    if diagonal.is_finite() && !(area > MIN_AREA_FRACTION * diagonal * diagonal) {
+    if diagonal.is_finite() && area <= MIN_AREA_FRACTION * diagonal * diagonal {
         return Some("the shape's faces have zero area (their corners lie on a line)");
     }
     None
