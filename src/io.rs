@@ -21,18 +21,77 @@ fn temporary_for(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.ks-tmp-{}", std::process::id()))
 }
 
+/// What `path` is when it exists and is not a regular file ("a character device", "a FIFO", …),
+/// following symbolic links; `None` for a regular file or a path that does not exist. An output
+/// is only ever a regular file: a rename over a device node or a FIFO would replace it.
+pub fn special_kind(path: &Path) -> Option<&'static str> {
+    let meta = std::fs::metadata(path).ok()?;
+    let kind = meta.file_type();
+    if kind.is_file() {
+        return None;
+    }
+    if kind.is_dir() {
+        return Some("a folder");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() {
+            return Some("a character device");
+        }
+        if kind.is_block_device() {
+            return Some("a block device");
+        }
+        if kind.is_fifo() {
+            return Some("a FIFO (named pipe)");
+        }
+        if kind.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("a special file")
+}
+
+/// Opens `tmp` as a new, empty file. A leftover of the same name (a killed run with the same
+/// pid) is removed first, so the open never lands on an existing file, FIFO or device.
+fn create_temporary(tmp: &Path) -> std::io::Result<std::fs::File> {
+    let open = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(tmp)
+    };
+    match open() {
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            std::fs::remove_file(tmp)?;
+            open()
+        }
+        other => other,
+    }
+}
+
 /// Writes `contents` to `path` through a temporary file in the same folder and a rename: readers
 /// see the old file or the new one, never a truncated one. The temporary file is removed on error.
+/// A `path` that exists and is not a regular file (a device, a FIFO, a socket, a folder) is
+/// refused with [`std::io::ErrorKind::InvalidInput`] and left as it is.
 pub fn write_atomic(path: &Path, contents: impl AsRef<[u8]>) -> std::io::Result<()> {
+    if let Some(kind) = special_kind(path) {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("is {kind}, not a regular file; outputs are written only to regular files or new paths"),
+        ));
+    }
     let tmp = temporary_for(path);
+    let mut created = false;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
+        let mut f = create_temporary(&tmp)?;
+        created = true;
         f.write_all(contents.as_ref())?;
         f.sync_all()?;
         drop(f);
         std::fs::rename(&tmp, path)
     })();
-    if result.is_err() {
+    if result.is_err() && created {
         let _ = std::fs::remove_file(&tmp);
     }
     result
@@ -140,6 +199,26 @@ mod tests {
         assert_eq!(names.len(), 1, "a temporary file was left behind");
         // a folder that does not exist: an error, and nothing created
         assert!(write_atomic(&dir.join("no/such/b.txt"), "x").is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn atomic_write_leaves_a_fifo_in_place() {
+        let dir = std::env::temp_dir().join(format!("kshell-io-fifo-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let fifo = dir.join("out.toml");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !made.is_ok_and(|st| st.success()) {
+            eprintln!("no mkfifo on this machine: the FIFO case is not run");
+            std::fs::remove_dir_all(&dir).unwrap();
+            return;
+        }
+        let err = write_atomic(&fifo, "x").unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::InvalidInput);
+        assert!(err.to_string().contains("a FIFO"), "{err}");
+        assert_eq!(special_kind(&fifo), Some("a FIFO (named pipe)"));
+        let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(names.len(), 1, "a temporary file was left behind");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

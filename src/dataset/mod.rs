@@ -242,6 +242,19 @@ impl fmt::Display for DatasetError {
 }
 
 impl FabricDataset {
+    /// The files the dataset comes from: its `fabric.toml`, each tensile curve and each
+    /// `[[shape]]` OBJ (the latter two joined to the TOML's folder, as they were read). A
+    /// command that writes counts all of them as its inputs.
+    pub fn files(&self) -> Vec<PathBuf> {
+        let dir = self.path.parent().unwrap_or(std::path::Path::new(""));
+        let curves = self.tensile.iter().map(|t| dir.join(&t.curve));
+        let objs = self.shapes.iter().map(|sh| dir.join(&sh.obj));
+        std::iter::once(self.path.clone())
+            .chain(curves)
+            .chain(objs)
+            .collect()
+    }
+
     /// The tensile tests (repeats) at `angle_deg` (within 1e-9°).
     pub fn tests_at(&self, angle_deg: f64) -> Vec<&TensileTest> {
         self.tensile

@@ -453,6 +453,11 @@ fn shapes_are_read_checked_and_written_back() {
     );
     assert_eq!(s.target.positions[2], [0.1, 0.1, 1e-3]);
     assert_eq!(s.target.triangles.len(), 2);
+    // the files it comes from: what a command that writes must not overwrite
+    assert_eq!(
+        d.files(),
+        ["fabric.toml", "warp-1.csv", "frame.obj"].map(|f| dir.join(f))
+    );
     // written back (OBJ in metres) and read again: the same dataset
     let out = dir.join("copy");
     write_dataset(&out, &d).unwrap();

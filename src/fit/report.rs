@@ -34,11 +34,11 @@ fn toml_key(k: &str) -> String {
 /// tables report and the error the verdict reads.
 pub const ERROR_KEY: &str = "errors: avg_rel_error is the raw mean |relative error| at the nominal angle (a repeat's force scale included); judged_error is what the verdict reads (repeats fitted together: the larger of scaled_error and the fit's distance outside their scatter band; a bend: |drape angle - target| / target)";
 
-/// The per-test table printed at the end of a fit: one row per test, its `verdict` mark and,
-/// beside it, the `judged_error` that decides the mark; then [`ERROR_KEY`] and the verdict.
-pub fn table(r: &FitResult) -> String {
-    let mut s = format!(
-        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7} {:>12}\n",
+/// The table's columns through `verdict`, which every report's `summary.txt` starts with (the
+/// `judged_error` column follows them).
+fn table_columns() -> String {
+    format!(
+        "{:<11} {:>7} {:<16} {:>14} {:>7} {:>13} {:>16} {:>13} {:>13} {:>8} {:>8} {:>9} {:>6} {:>7}",
         "kind",
         "angle",
         "curve",
@@ -52,9 +52,22 @@ pub fn table(r: &FitResult) -> String {
         "mesh",
         "mesh_err",
         "fitted",
-        "verdict",
-        "judged_error"
-    );
+        "verdict"
+    )
+}
+
+/// Whether `text` (a `summary.txt`) is one that [`write_report`] wrote: its first line is the
+/// table's header (its columns through `verdict`). A folder holding a `summary.txt` that is not one is no earlier report.
+pub fn is_report_summary(text: &str) -> bool {
+    text.lines()
+        .next()
+        .is_some_and(|l| l.starts_with(&table_columns()))
+}
+
+/// The per-test table printed at the end of a fit: one row per test, its `verdict` mark and,
+/// beside it, the `judged_error` that decides the mark; then [`ERROR_KEY`] and the verdict.
+pub fn table(r: &FitResult) -> String {
+    let mut s = format!("{} {:>12}\n", table_columns(), "judged_error");
     let judged = judge(r, r.max_error);
     for (t, judgement) in r.tests.iter().zip(&judged) {
         let opt = |v: Option<f64>, f: &dyn Fn(f64) -> String| v.map(f).unwrap_or("-".into());

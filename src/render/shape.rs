@@ -113,6 +113,7 @@ pub fn parse_shape(text: &str, name: &str) -> Result<RenderMesh, ObjError> {
         });
     }
     let mut normal_of = vec![[0.0; 3]; v.len()];
+    let mut twice_area = 0.0;
     for t in &out.triangles {
         let [a, b, c] = t.map(|i| v[pos_of[i as usize]]);
         let (e, f) = (sub(b, a), sub(c, a));
@@ -121,6 +122,7 @@ pub fn parse_shape(text: &str, name: &str) -> Result<RenderMesh, ObjError> {
             e[2] * f[0] - e[0] * f[2],
             e[0] * f[1] - e[1] * f[0],
         ];
+        twice_area += norm(nrm);
         for &i in t {
             let s = &mut normal_of[pos_of[i as usize]];
             for c in 0..3 {
@@ -128,10 +130,47 @@ pub fn parse_shape(text: &str, name: &str) -> Result<RenderMesh, ObjError> {
             }
         }
     }
-    out.positions = pos_of.iter().map(|&p| v[p]).collect();
+    let used: Vec<Vec3> = pos_of.iter().map(|&p| v[p]).collect();
+    if let Some(why) = degenerate(&used, 0.5 * twice_area) {
+        return Err(ObjError {
+            path: name.to_string(),
+            line: None,
+            message: format!("{why}: nothing to draw"),
+        });
+    }
+    out.positions = used;
     out.normals = pos_of.iter().map(|&p| unit(normal_of[p])).collect();
     out.uv = uv.iter().copied().collect::<Option<Vec<_>>>();
     Ok(out)
+}
+
+/// Smallest total face area of a shape worth drawing, relative to the square of its
+/// bounding-box diagonal: below it the faces are lines or points, and the picture is blank.
+const MIN_AREA_FRACTION: f64 = 1e-12;
+
+/// Why the faces' corners `p` with total face area `area` draw nothing, if they do not: every
+/// corner at one point, or faces of no area (corners on a line).
+fn degenerate(p: &[Vec3], area: f64) -> Option<&'static str> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for q in p {
+        for c in 0..3 {
+            lo[c] = lo[c].min(q[c]);
+            hi[c] = hi[c].max(q[c]);
+        }
+    }
+    let diagonal = norm(sub(hi, lo));
+    if diagonal == 0.0 {
+        return Some("the shape has zero size (every face's corners at one point)");
+    }
+    if diagonal.is_finite() && area <= MIN_AREA_FRACTION * diagonal * diagonal {
+        return Some("the shape's faces have zero area (their corners lie on a line)");
+    }
+    None
+}
+
+fn norm(a: Vec3) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
 }
 
 fn sub(a: Vec3, b: Vec3) -> Vec3 {
@@ -192,5 +231,22 @@ mod tests {
         // without texture coordinates on every corner, no yarn lines
         let m = parse_shape("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n", "t.obj").unwrap();
         assert!(m.uv.is_none());
+    }
+
+    #[test]
+    fn shapes_without_area_are_refused() {
+        let e = parse_shape("v 1 2 3\nv 1 2 3\nv 1 2 3\nf 1 2 3\n", "dot.obj").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "dot.obj: the shape has zero size (every face's corners at one point): nothing to draw"
+        );
+        let e = parse_shape("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "line.obj").unwrap_err();
+        assert!(e.to_string().contains("zero area"), "{e}");
+        // an unused far vertex does not make a point-sized face drawable
+        let text = "v 0 0 0\nv 0 0 0\nv 0 0 0\nv 5 5 5\nf 1 2 3\n";
+        assert!(parse_shape(text, "far.obj").is_err());
+        // a tiny but real face draws
+        let m = parse_shape("v 0 0 0\nv 1e-6 0 0\nv 0 1e-6 0\nf 1 2 3\n", "t.obj").unwrap();
+        assert_eq!(m.triangles.len(), 1);
     }
 }

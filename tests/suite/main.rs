@@ -22,6 +22,7 @@ mod model_cli;
 mod off_axis;
 mod opensubdiv_oracle;
 mod orthotropic;
+mod outputs;
 mod plausible_data;
 mod polish;
 mod refinement;

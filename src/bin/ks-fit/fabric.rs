@@ -1,11 +1,17 @@
 //! The fabric commands of `ks-fit`: `fit` on the shell (a dataset to a material) and `check`
 //! (what a dataset holds and what `fit` will do with it).
 
-use crate::guard::Guard;
+use crate::guard::{Guard, Marker};
 use kshell::dataset::FabricDataset;
 use kshell::fit::shape_target::{ShapeFit, ShapeTarget};
 use kshell::io::{cell, shown};
 use std::path::{Path, PathBuf};
+
+/// What marks a folder as an earlier `--report`: a summary.txt that a report wrote.
+const REPORT: Marker = Marker {
+    file: "summary.txt",
+    ours: kshell::fit::report::is_report_summary,
+};
 
 /// Where `fit` writes the material: `-o`, or `<dataset name>-fit.toml` in the current folder.
 fn fit_output(output: Option<&Path>, name: &str) -> PathBuf {
@@ -41,13 +47,10 @@ pub fn cmd_fit(
     let out = fit_output(output, &data.name);
     let mut guard = Guard::new(force);
     guard.input(file);
-    let dir = file.parent().unwrap_or(Path::new(""));
-    for t in &data.tensile {
-        guard.input(&dir.join(&t.curve));
-    }
+    guard.dataset(&data);
     guard.file("-o", &out)?;
     if let Some(r) = &report {
-        guard.folder("--report", r.dir, "summary.txt")?;
+        guard.folder("--report", r.dir, &REPORT)?;
     }
     for w in &warnings {
         eprintln!("ks-fit: {w}");

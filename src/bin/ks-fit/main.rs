@@ -10,6 +10,7 @@ mod fit;
 mod flags;
 mod guard;
 mod lab_args;
+mod lock;
 mod mesh;
 mod models;
 mod recommend;

@@ -142,6 +142,7 @@ pub fn fit(
     });
     let mut guard = crate::guard::Guard::new(force);
     guard.input(file);
+    guard.dataset(&data);
     guard.file("-o", &out)?;
     for w in &warnings {
         eprintln!("ks-fit: {w}");

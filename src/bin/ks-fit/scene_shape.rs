@@ -11,6 +11,15 @@ use kshell::tri::{TriKind, TriModel};
 use kshell::Vec3;
 use std::time::Instant;
 
+/// The first line of every `scene.toml` that `ks-fit scene` writes (the scene's name follows).
+pub const SCENE_TOML_MARK: &str = "# written by ks-fit scene ";
+
+/// What marks a folder as an earlier `ks-fit scene --out`: a scene.toml that a scene wrote.
+pub const SCENE: crate::guard::Marker = crate::guard::Marker {
+    file: "scene.toml",
+    ours: |text| text.starts_with(SCENE_TOML_MARK),
+};
+
 /// The material a scene runs: the shell's law, or a triangle model's parameters (from the
 /// file's [model] table, or converted from the shell law at each mesh's cell size).
 pub enum SceneMaterial {

@@ -5,7 +5,7 @@
 
 use crate::flags::Model;
 use crate::guard::Guard;
-use crate::scene_shape::{SceneMaterial, Shape};
+use crate::scene_shape::{SceneMaterial, Shape, SCENE, SCENE_TOML_MARK};
 use clap::Subcommand;
 use kshell::converge::{analyse, Chosen, ErrorMeasure, Level};
 use kshell::material::{load_material, FabricMaterial};
@@ -339,7 +339,7 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(scene.name()));
     let mut guard = Guard::new(force);
     guard.input(&a.material);
-    guard.folder("--out", &out, "scene.toml")?;
+    guard.folder("--out", &out, &SCENE)?;
     let t0 = Instant::now();
     let fail = |mesh: usize, e: SceneError| format!("{} on {mesh}x{mesh}: {e}", scene.name());
     let (run, choice) = match a.mesh {
@@ -471,7 +471,7 @@ fn write_outputs(
     );
     let c = d.counts();
     let mut toml = format!(
-        "# written by ks-fit scene {name}\nscene = \"{name}\"\nmaterial = {material}\nmodel = {model}\nmesh = \"{m}x{m}\"\nmesh_choice = {why}\nqoi = {qoi_name}\nqoi_value = {qoi}\n",
+        "{SCENE_TOML_MARK}{name}\nscene = \"{name}\"\nmaterial = {material}\nmodel = {model}\nmesh = \"{m}x{m}\"\nmesh_choice = {why}\nqoi = {qoi_name}\nqoi_value = {qoi}\n",
         name = scene.name(),
         material = kshell::io::toml_string(&scene.args().material.display().to_string()),
         model = kshell::io::toml_string(&scene.args().model),

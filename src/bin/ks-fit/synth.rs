@@ -2,11 +2,18 @@
 //! or a triangle model.
 
 use crate::flags::{grading_help, model_help, yarn_rule_help, Model};
-use crate::guard::Guard;
+use crate::guard::{Guard, Marker};
 use crate::{parse_grading, parse_mesh};
 use kshell::material::load_material;
 use kshell::synth::SynthOptions;
 use std::path::{Path, PathBuf};
+
+/// The marker of a synth `--out`: a folder holding a dataset's fabric.toml is never written
+/// over without `--force`, whoever wrote the file (the guard refuses it on the name alone).
+const DATASET: Marker = Marker {
+    file: "fabric.toml",
+    ours: |_| true,
+};
 
 /// The flags of `ks-fit synth`.
 #[derive(clap::Args)]
@@ -140,7 +147,7 @@ fn cmd_synth(
     let lab = lab_model(material, model)?;
     let mut guard = Guard::new(force);
     guard.input(material);
-    guard.folder("--out", out, "fabric.toml")?;
+    guard.folder("--out", out, &DATASET)?;
     let mut progress = |line: &str| eprintln!("ks-fit: synth: {line}");
     let data =
         kshell::synth::synthesize_with(&lab, opts, &mut progress).map_err(|e| e.to_string())?;
