@@ -2,11 +2,13 @@
 //! and a batch manifest, and summarises a `ks-fit batch` run of it against the truth.
 //!
 //! ```text
-//! cargo run --release --example zoo -- generate DIR [--count N] [--seed S] [--models-every K]
+//! cargo run --release --example zoo -- generate DIR [--count N] [--seed S] [--models-every K] [--clean]
 //! ks-fit batch DIR/manifest.csv --out DIR/fits
 //! cargo run --release --example zoo -- summary DIR > DIR/summary.md
 //! ```
-//! Generation is resumable: a fabric whose `fabric.toml` exists is not built again.
+//! Generation is resumable: a fabric whose `fabric.toml` exists is not built again. `--clean`
+//! writes only the law fabrics, without the lab's artefacts (noise, scatter, misalignment,
+//! slack, preload, kN), one curve per angle: whether the fit recovers the truth.
 
 use kshell::dataset::dataset_toml;
 use kshell::material::{load_material, FabricMaterial};
@@ -37,10 +39,11 @@ fn main() {
             flag("--count", 20) as usize,
             flag("--seed", 58),
             flag("--models-every", 10) as usize,
+            args.iter().any(|a| a == "--clean"),
         ),
         (Some("summary"), Some(dir)) => summary(&dir).map(|s| print!("{s}")),
         _ => Err(
-            "usage: zoo generate DIR [--count N] [--seed S] [--models-every K] | zoo summary DIR"
+            "usage: zoo generate DIR [--count N] [--seed S] [--models-every K] [--clean] | zoo summary DIR"
                 .into(),
         ),
     };
@@ -93,9 +96,15 @@ fn describe(f: &ZooFabric) -> String {
 
 const ZOO_HEADER: &str = "fabric,source,angles,repeats,points,max_strain,width_mm,gauge_mm,slack_mm,preload_mm,export,bends,bias_only,built";
 
-fn generate(dir: &Path, count: usize, seed: u64, every: usize) -> Result<(), String> {
+fn generate(dir: &Path, count: usize, seed: u64, every: usize, clean: bool) -> Result<(), String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let fabrics: Vec<ZooFabric> = (0..count).map(|i| draw(seed, i)).collect();
+    let mut fabrics: Vec<ZooFabric> = (0..count).map(|i| draw(seed, i)).collect();
+    if clean {
+        fabrics.retain(|f| matches!(f.source, Source::Law(_)));
+        for f in &mut fabrics {
+            f.protocol = f.protocol.clean();
+        }
+    }
     let built: Vec<String> = fabrics
         .par_iter()
         .map(|f| match write_fabric(dir, f) {
@@ -106,7 +115,12 @@ fn generate(dir: &Path, count: usize, seed: u64, every: usize) -> Result<(), Str
             }
         })
         .collect();
-    let mut index = format!("# zoo of {count} fabrics, seed {seed}\n{ZOO_HEADER}\n");
+    let what = if clean {
+        "law fabrics without artefacts"
+    } else {
+        "fabrics"
+    };
+    let mut index = format!("# zoo of {count} draws, {what}, seed {seed}\n{ZOO_HEADER}\n");
     let mut manifest = String::from("fabric,dataset,model\n");
     for (i, (f, b)) in fabrics.iter().zip(&built).enumerate() {
         let _ = writeln!(index, "{},{b}", describe(f));

@@ -59,6 +59,23 @@ pub struct Protocol {
     pub bias_only: bool,
 }
 
+impl Protocol {
+    /// The same tests without the lab's artefacts: no noise, scatter, misalignment, slack or
+    /// preload, forces in newtons (the truth-recovery study).
+    pub fn clean(&self) -> Protocol {
+        Protocol {
+            scale_noise: 0.0,
+            point_noise: 0.0,
+            misalign_deg: 0.0,
+            slack: 0.0,
+            preload: 0.0,
+            export: Export::Newtons,
+            repeats: 1,
+            ..self.clone()
+        }
+    }
+}
+
 /// What made a fabric's curves.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Source {
