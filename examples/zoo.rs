@@ -10,7 +10,6 @@
 //! writes only the law fabrics, without the lab's artefacts (noise, scatter, misalignment,
 //! slack, preload, kN), one curve per angle: whether the fit recovers the truth.
 
-use kshell::dataset::dataset_toml;
 use kshell::material::{load_material, FabricMaterial};
 use kshell::synth::zoo::{build, draw, Export, Source, ZooFabric};
 use rayon::prelude::*;
@@ -151,15 +150,9 @@ fn write_fabric(dir: &Path, f: &ZooFabric) -> Result<(), String> {
     let z = build(f, &mut |_| {}).map_err(|e| e.to_string())?;
     let tmp = dir.join(format!(".{}.tmp", f.name));
     let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).map_err(|e| e.to_string())?;
-    for (name, text) in &z.curves {
-        write(&tmp.join(name), text)?;
-    }
-    if let Some(truth) = &z.truth {
-        write(&tmp.join("truth.toml"), truth)?;
-    }
     let comment = format!("fabric-zoo dataset {} ({})", f.name, describe(f));
-    write(&tmp.join("fabric.toml"), &dataset_toml(&z.data, &comment))?;
+    z.write(&tmp, &comment)
+        .map_err(|e| format!("{}: {e}", tmp.display()))?;
     std::fs::rename(&tmp, &folder).map_err(|e| e.to_string())?;
     eprintln!(
         "zoo: {} built in {:.1} s",

@@ -39,3 +39,4 @@ mod strategies;
 mod tri_fit;
 mod tri_models;
 mod tri_scenes;
+mod zoo;

@@ -4,11 +4,13 @@
 use super::curves::pchip;
 use super::{Export, Protocol, Source, ZooFabric, G};
 use crate::assembly::YarnRule;
-use crate::dataset::{BendTest, FabricDataset, Known, TensileTest, DEFAULT_DRAPE_ANGLE_DEG};
+use crate::dataset::{
+    dataset_toml, BendTest, FabricDataset, Known, TensileTest, DEFAULT_DRAPE_ANGLE_DEG,
+};
 use crate::material::material_toml;
 use crate::scene::STRIP_GRADING;
 use crate::synth::{LabModel, Rng, SynthError};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A built dataset: the dataset (curve paths relative to its folder), each curve file's text,
 /// and the truth's material file for law fabrics.
@@ -17,6 +19,24 @@ pub struct ZooDataset {
     pub data: FabricDataset,
     pub curves: Vec<(PathBuf, String)>,
     pub truth: Option<String>,
+}
+
+impl ZooDataset {
+    /// Writes the dataset into `folder` (created if missing): `fabric.toml` with `comment` on
+    /// top, its curve files, and `truth.toml` for a law fabric.
+    pub fn write(&self, folder: &Path, comment: &str) -> std::io::Result<()> {
+        std::fs::create_dir_all(folder)?;
+        for (name, text) in &self.curves {
+            std::fs::write(folder.join(name), text)?;
+        }
+        if let Some(truth) = &self.truth {
+            std::fs::write(folder.join("truth.toml"), truth)?;
+        }
+        std::fs::write(
+            folder.join("fabric.toml"),
+            dataset_toml(&self.data, comment),
+        )
+    }
 }
 
 /// Points the virtual lab solves a law fabric's curve at; the lab's record is interpolated
