@@ -93,7 +93,7 @@ impl Fitter<'_> {
                 let why = if map.eta(&self.law).degree() < degree {
                     Some("came out with a term too small to matter".to_string())
                 } else {
-                    self.implausible(map, trial.2.as_ref())
+                    super::plausible::implausible(&self.law, map, trial.2.as_ref())
                 };
                 let why = why.or_else(|| {
                     (self.opts.fixed_degree.is_none() && trial.0 > self.opts.degree_gain * prev.0)

@@ -50,7 +50,8 @@ impl Fitter<'_> {
             self.law = start.clone();
             let mut changed = false;
             for m in &maps {
-                changed |= self.cut_before_fall(*m);
+                let note = super::plausible::cut_before_fall(&mut self.law, *m);
+                changed |= self.law_note(note);
             }
             if linear && map.eta(&self.law) != &Eta::linear() {
                 *map.eta_mut(&mut self.law) = Eta::linear();

@@ -188,7 +188,8 @@ fn fit_level(
             // with the joint sweep a finer level refits the yarn stiffness over the joint
             // strips; η's shape stays the first level's (the mesh check measures it)
             f.joint_stiffness(maps[k], k, sets, level)?;
-            f.keep_rising(maps[k].dir);
+            let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
+            f.law_note(note);
             continue;
         }
         let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
@@ -210,7 +211,8 @@ fn fit_level(
         if let Some((lo, hi)) = range {
             set_cutoff(f, k, lo, hi);
         }
-        f.keep_rising(maps[k].dir);
+        let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
+        f.law_note(note);
     }
     Ok(())
 }

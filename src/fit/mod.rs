@@ -339,6 +339,14 @@ struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
+    /// Says and notes a change a rule made to the law (`None`: no change); whether it did.
+    fn law_note(&mut self, note: Option<String>) -> bool {
+        let Some(note) = note else { return false };
+        self.journal.say(&note);
+        self.journal.note(note);
+        true
+    }
+
     fn material(&self) -> FabricMaterial {
         FabricMaterial {
             name: self.data.name.clone(),

@@ -14,8 +14,8 @@
 //!   peak, so that past it the law continues on its rising tangent, with a note.
 
 use super::map::{var_to_beta, Direction, StageMap};
-use super::{Fitter, StrainRange};
-use crate::material::Eta;
+use super::StrainRange;
+use crate::material::{Eta, Orthotropic};
 
 /// Largest share of η' a term may have over the exercised range and still be dropped.
 pub const NEGLIGIBLE: f64 = 1e-3;
@@ -94,73 +94,64 @@ pub fn fall_cutoff(eta: &Eta, xhat: f64) -> Option<f64> {
 
 /// The fitter's side of the checks: which degree is plausible, the cut-offs below any stress
 /// peak, and where a new term starts.
-impl Fitter<'_> {
-    /// Why the current law's η of `map` is not a plausible higher degree, if it is not: it
-    /// lost a term as negligible, or its stress stops rising inside the exercised range
-    /// (`range`, else the strain x̂ estimates) (see [`super::plausible`]).
-    pub(super) fn implausible(&self, map: StageMap, range: Option<&StrainRange>) -> Option<String> {
-        let eta = map.eta(&self.law);
-        if !negligible_terms(eta, map.xhat).is_empty() {
-            return Some("adds a term too small to matter".into());
-        }
-        let e_max = range.map_or(map.xhat.sqrt(), |r| exercised(map.dir, r));
-        stress_peak(eta, e_max).map(|e| {
-            format!("has its stress stop rising at strain {e:.4}, inside the tested range")
-        })
+/// Why `law`'s η of `map` is not a plausible higher degree, if it is not: it lost a term as
+/// negligible, or its stress stops rising inside the exercised range (`range`, else the
+/// strain x̂ estimates) (see the module doc).
+pub(super) fn implausible(
+    law: &Orthotropic,
+    map: StageMap,
+    range: Option<&StrainRange>,
+) -> Option<String> {
+    let eta = map.eta(law);
+    if !negligible_terms(eta, map.xhat).is_empty() {
+        return Some("adds a term too small to matter".into());
     }
+    let e_max = range.map_or(map.xhat.sqrt(), |r| exercised(map.dir, r));
+    stress_peak(eta, e_max)
+        .map(|e| format!("has its stress stop rising at strain {e:.4}, inside the tested range"))
+}
 
-    /// Moves a cut-off of `dir` below the strain where the fitted stress stops rising, if
-    /// that is inside it, with a note: the law then continues past it on its rising tangent.
-    pub(super) fn keep_rising(&mut self, dir: Direction) {
-        let law = &mut self.law;
-        let (eta, cut, name) = match dir {
-            Direction::Warp => (&law.warp, &mut law.cutoffs.e11, "Ẽ11"),
-            Direction::Weft => (&law.weft, &mut law.cutoffs.e22, "Ẽ22"),
-            Direction::Shear => (&law.shear, &mut law.cutoffs.e12, "|Ẽ12|"),
-        };
-        let e_max = cut.0.abs().max(cut.1.abs());
-        if !e_max.is_finite() {
-            return;
-        }
-        if let Some(e) = stress_peak(eta, e_max) {
-            let to = 0.95 * e;
-            *cut = (cut.0.max(-to), cut.1.min(to));
-            let note = format!(
-                "the fitted {} law's stress stops rising at strain {e:.4}, inside the strains the tests reach: cut-off {name} lowered to {to:.4}, past which the law goes on along its tangent",
-                dir.name()
-            );
-            self.journal.say(&note);
-            self.journal.note(note);
-        }
+/// `law`'s η of `dir` with the cut-off it acts under, and the cut-off's strain's name.
+fn direction(law: &mut Orthotropic, dir: Direction) -> (&Eta, &mut (f64, f64), &'static str) {
+    match dir {
+        Direction::Warp => (&law.warp, &mut law.cutoffs.e11, "Ẽ11"),
+        Direction::Weft => (&law.weft, &mut law.cutoffs.e22, "Ẽ22"),
+        Direction::Shear => (&law.shear, &mut law.cutoffs.e12, "|Ẽ12|"),
     }
 }
 
-impl Fitter<'_> {
-    /// Cuts the law of `map`'s direction off at its [`fall_cutoff`] where it has one tighter
-    /// than its cut-offs, with a note; whether it did. Past the cut-off the law goes on along
-    /// its rising tangent, so the shell's energy stays finite wherever its strips stray.
-    pub(super) fn cut_before_fall(&mut self, map: StageMap) -> bool {
-        let law = &mut self.law;
-        let (eta, cut, name) = match map.dir {
-            Direction::Warp => (&law.warp, &mut law.cutoffs.e11, "Ẽ11"),
-            Direction::Weft => (&law.weft, &mut law.cutoffs.e22, "Ẽ22"),
-            Direction::Shear => (&law.shear, &mut law.cutoffs.e12, "|Ẽ12|"),
-        };
-        let Some(to) = fall_cutoff(eta, map.xhat) else {
-            return false;
-        };
-        if cut.0 >= -to && cut.1 <= to {
-            return false;
-        }
-        *cut = (cut.0.max(-to), cut.1.min(to));
-        let note = format!(
-            "the {} law's stress stops rising within {PEAK_SEARCH} times the tested strain (or its stiffest term falls past it): cut-off {name} at {to:.4}, past which the law goes on along its tangent",
-            map.dir.name()
-        );
-        self.journal.say(&note);
-        self.journal.note(note);
-        true
+/// Moves `law`'s cut-off of `dir` below the strain where the fitted stress stops rising, if
+/// that is inside it; the note that says so. The law then continues past it on its rising
+/// tangent.
+pub(super) fn keep_rising(law: &mut Orthotropic, dir: Direction) -> Option<String> {
+    let (eta, cut, name) = direction(law, dir);
+    let e_max = cut.0.abs().max(cut.1.abs());
+    if !e_max.is_finite() {
+        return None;
     }
+    let e = stress_peak(eta, e_max)?;
+    let to = 0.95 * e;
+    *cut = (cut.0.max(-to), cut.1.min(to));
+    Some(format!(
+        "the fitted {} law's stress stops rising at strain {e:.4}, inside the strains the tests reach: cut-off {name} lowered to {to:.4}, past which the law goes on along its tangent",
+        dir.name()
+    ))
+}
+
+/// Cuts `law`'s η of `map`'s direction off at its [`fall_cutoff`] where it has one tighter
+/// than its cut-offs; the note that says so. Past the cut-off the law goes on along its rising
+/// tangent, so the shell's energy stays finite wherever its strips stray.
+pub(super) fn cut_before_fall(law: &mut Orthotropic, map: StageMap) -> Option<String> {
+    let (eta, cut, name) = direction(law, map.dir);
+    let to = fall_cutoff(eta, map.xhat)?;
+    if cut.0 >= -to && cut.1 <= to {
+        return None;
+    }
+    *cut = (cut.0.max(-to), cut.1.min(to));
+    Some(format!(
+        "the {} law's stress stops rising within {PEAK_SEARCH} times the tested strain (or its stiffest term falls past it): cut-off {name} at {to:.4}, past which the law goes on along its tangent",
+        map.dir.name()
+    ))
 }
 
 /// The largest strain of `dir`'s component in a strain range.

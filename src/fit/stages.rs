@@ -123,7 +123,7 @@ impl Fitter<'_> {
                 let mut law = self.law.clone();
                 map.decode(&candidate.0, &mut law);
                 let saved = std::mem::replace(&mut self.law, law);
-                let why = self.implausible(map, None);
+                let why = super::plausible::implausible(&self.law, map, None);
                 self.law = saved;
                 if let Some(why) = why {
                     self.log_degree(format!(
@@ -541,7 +541,8 @@ pub(super) fn bootstrap_all(
     // a yarn law whose stress stops rising a little past the tests (a `--degree` the
     // bootstrap kept whatever it does, a softening degree 1) is cut off below that
     for map in &maps[..2] {
-        f.cut_before_fall(*map);
+        let note = super::plausible::cut_before_fall(&mut f.law, *map);
+        f.law_note(note);
     }
     f.a12.apply(&mut f.law);
     // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
