@@ -61,10 +61,11 @@ fn describe(f: &ZooFabric) -> String {
     let p = &f.protocol;
     let families = match &f.source {
         Source::Law(m) => format!(
-            "law degrees {}/{}/{}",
+            "law degrees {}/{}/{} by {}",
             m.law.warp.degree(),
             m.law.weft.degree(),
-            m.law.shear.degree()
+            m.law.shear.degree(),
+            f.lab.map_or("shell", |k| k.name())
         ),
         Source::Analytic {
             warp, weft, bias, ..
@@ -174,7 +175,27 @@ struct Fit {
     has_material: bool,
 }
 
+/// Each manifest row's (fabric, zoo fabric, model).
+fn read_manifest(dir: &Path) -> Result<Vec<(String, String, String)>, String> {
+    let path = dir.join("manifest.csv");
+    let mut rd = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut rows = Vec::new();
+    for row in rd.records() {
+        let row = row.map_err(|e| e.to_string())?;
+        let get = |c: usize| row.get(c).unwrap_or("").to_string();
+        let zoo = get(1).trim_end_matches("/fabric.toml").to_string();
+        let model = if get(2).is_empty() {
+            "kl".into()
+        } else {
+            get(2)
+        };
+        rows.push((get(0), zoo, model));
+    }
+    Ok(rows)
+}
+
 fn read_fits(dir: &Path) -> Result<Vec<Fit>, String> {
+    let manifest = read_manifest(dir)?;
     let path = dir.join("fits/summary.csv");
     let mut rd = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let head = rd.headers().map_err(|e| e.to_string())?.clone();
@@ -191,14 +212,9 @@ fn read_fits(dir: &Path) -> Result<Vec<Fit>, String> {
         let row = row.map_err(|e| e.to_string())?;
         let get = |c: usize| row.get(c).unwrap_or("").to_string();
         let fabric = get(c_fab);
-        let model = TRI_MODELS
-            .iter()
-            .find(|m| fabric.ends_with(&format!("-{m}")))
-            .map_or("kl", |m| m);
-        let zoo_name = fabric
-            .strip_suffix(&format!("-{model}"))
-            .unwrap_or(&fabric)
-            .to_string();
+        let Some((_, zoo_name, model)) = manifest.iter().find(|r| r.0 == fabric).cloned() else {
+            continue;
+        };
         fits.push(Fit {
             has_material: dir
                 .join("fits")

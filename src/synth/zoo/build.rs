@@ -7,9 +7,11 @@ use crate::assembly::YarnRule;
 use crate::dataset::{
     dataset_toml, BendTest, FabricDataset, Known, TensileTest, DEFAULT_DRAPE_ANGLE_DEG,
 };
-use crate::material::material_toml;
+use crate::material::{material_toml, FabricMaterial};
 use crate::scene::STRIP_GRADING;
 use crate::synth::{LabModel, Rng, SynthError};
+use crate::tri::file::TriSource;
+use crate::tri::TriKind;
 use std::path::{Path, PathBuf};
 
 /// A built dataset: the dataset (curve paths relative to its folder), each curve file's text,
@@ -61,7 +63,7 @@ pub fn build(fabric: &ZooFabric, progress: &mut dyn FnMut(&str)) -> Result<ZooDa
         for r in 1..=p.repeats {
             let stem = format!("a{angle}-{r}");
             let cut = angle + p.misalign_deg * rng.normal();
-            let lab = lab_curve(&fabric.source, p, cut).map_err(|e| match e {
+            let lab = lab_curve(fabric, cut).map_err(|e| match e {
                 SynthError::Scene { source, .. } => SynthError::Scene {
                     test: format!("{}: tensile {stem}", fabric.name),
                     source,
@@ -74,11 +76,7 @@ pub fn build(fabric: &ZooFabric, progress: &mut dyn FnMut(&str)) -> Result<ZooDa
             curves.push((PathBuf::from(format!("{stem}.csv")), text));
         }
     }
-    let bend = if p.bends {
-        bends(&fabric.source)?
-    } else {
-        Vec::new()
-    };
+    let bend = if p.bends { bends(fabric)? } else { Vec::new() };
     let (areal_density, thickness) = match &fabric.source {
         Source::Law(m) => (m.areal_density, m.thickness),
         Source::Analytic {
@@ -93,9 +91,10 @@ pub fn build(fabric: &ZooFabric, progress: &mut dyn FnMut(&str)) -> Result<ZooDa
         known.a22 = Some(m.law.a22);
         known.thickness = Some(m.thickness);
     }
-    let truth = match &fabric.source {
-        Source::Law(m) => Some(material_toml(m)),
-        Source::Analytic { .. } => None,
+    // the truth of a fabric a triangle model measured is the model's, not the shell's
+    let truth = match (&fabric.source, fabric.lab) {
+        (Source::Law(m), None) => Some(material_toml(m)),
+        _ => None,
     };
     let data = FabricDataset {
         name: fabric.name.clone(),
@@ -117,16 +116,17 @@ pub fn build(fabric: &ZooFabric, progress: &mut dyn FnMut(&str)) -> Result<ZooDa
 
 /// The exact curve of one strip cut at `cut` degrees at [`SOLVED_POINTS`] elongations:
 /// (elongation m, force N) from zero to the protocol's largest strain.
-fn lab_curve(source: &Source, p: &Protocol, cut: f64) -> Result<Vec<(f64, f64)>, SynthError> {
+fn lab_curve(fabric: &ZooFabric, cut: f64) -> Result<Vec<(f64, f64)>, SynthError> {
+    let p = &fabric.protocol;
     let (width, gauge) = p.strip;
     let top = p.max_strain * gauge;
     let n = SOLVED_POINTS.min(p.points.max(2));
     let elongations: Vec<f64> = (1..=n).map(|i| top * i as f64 / n as f64).collect();
-    let forces: Vec<f64> = match source {
+    let forces: Vec<f64> = match &fabric.source {
         Source::Law(m) => {
             let across = STRIP_FACES_ACROSS;
             let along = ((across as f64 * gauge / width).round() as usize).max(across);
-            let strip = LabModel::Shell(m.clone()).strip(
+            let strip = lab_model(m, fabric.lab).strip(
                 (width, gauge, cut),
                 (across, along),
                 (STRIP_GRADING, YarnRule::Auto),
@@ -207,15 +207,29 @@ fn record(
     (test, text)
 }
 
+/// The virtual lab's model of a law fabric: the shell, or the triangle model `tri` converted
+/// from it.
+fn lab_model(m: &FabricMaterial, tri: Option<TriKind>) -> LabModel {
+    match tri {
+        None => LabModel::Shell(m.clone()),
+        Some(kind) => LabModel::Tri {
+            kind,
+            source: TriSource::Shell(m.clone()),
+            name: m.name.clone(),
+            thickness: m.thickness,
+        },
+    }
+}
+
 /// Warp and weft cantilevers at 41.5°: the virtual lab's overhang for law fabrics, twice
 /// ASTM D1388's bending length c = (G / (ρ g))^⅓ for analytic ones.
-fn bends(source: &Source) -> Result<Vec<BendTest>, SynthError> {
+fn bends(fabric: &ZooFabric) -> Result<Vec<BendTest>, SynthError> {
     let mut out = Vec::new();
     for (k, angle) in [90.0, 0.0].into_iter().enumerate() {
-        let overhang = match source {
+        let overhang = match &fabric.source {
             Source::Law(m) => {
                 let solves = std::cell::Cell::new(0);
-                let lab = LabModel::Shell(m.clone());
+                let lab = lab_model(m, fabric.lab);
                 let test = format!("{}: cantilever {angle}°", m.name);
                 crate::synth::overhang::find_overhang(&lab, angle, &test, &solves)?.overhang
             }

@@ -4,7 +4,9 @@
 //! Every fabric is drawn from its own random stream (the zoo's seed and its index), so the
 //! first N fabrics of a zoo do not depend on how many are drawn. Even indices are **law**
 //! fabrics: a material of the paper's law ([`draw_material`]) whose curves and bends the
-//! virtual lab measures ([`build`]), so the fit can be checked against the truth. Odd indices
+//! virtual lab measures ([`build`]), so the fit can be checked against the truth; one in four
+//! of them is measured by a triangle model of the same material instead of the shell (data
+//! another discretisation made: its own mesh, energy, bending and Poisson behaviour). Odd indices
 //! are **analytic** fabrics: curves of families a lab sees that the law did not make
 //! ([`curves::Family`]) and cantilever overhangs from ASTM D1388's bending length, so the fit
 //! shows what it does with a model that does not match. The ranges are written beside each
@@ -17,6 +19,7 @@ pub use build::{build, ZooDataset};
 
 use super::Rng;
 use crate::material::{BendingRigidity, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};
+use crate::tri::TriKind;
 use curves::Family;
 
 /// How a curve's forces are written.
@@ -98,6 +101,8 @@ pub struct ZooFabric {
     pub name: String,
     pub source: Source,
     pub protocol: Protocol,
+    /// the triangle model that measures a law fabric (`None`: the shell)
+    pub lab: Option<TriKind>,
 }
 
 /// Extra tensile angles a lab may add to warp, weft and bias, degrees from the weft.
@@ -155,11 +160,17 @@ pub fn draw(seed: u64, index: usize) -> ZooFabric {
         Source::Analytic { warp, weft, .. } => warp.stiffness().max(weft.stiffness()),
     };
     let protocol = draw_protocol(&mut rng, law, yarns);
-    let kind = if law { "law" } else { "analytic" };
+    let lab = (law && index % 8 == 6).then(|| TriKind::ALL[rng.int(0, 3)].1);
+    let kind = match (law, lab) {
+        (true, None) => "law",
+        (true, Some(k)) => k.name(),
+        (false, _) => "analytic",
+    };
     ZooFabric {
         name: format!("z{index:04}-{kind}"),
         source,
         protocol,
+        lab,
     }
 }
 

@@ -6,7 +6,11 @@ fn a_fabric_depends_on_the_seed_and_its_index_only() {
     assert_eq!(draw(58, 7), draw(58, 7));
     assert_ne!(draw(58, 7), draw(59, 7));
     assert_ne!(draw(58, 6), draw(58, 8));
-    assert!(draw(58, 6).name.ends_with("-law") && draw(58, 7).name.ends_with("-analytic"));
+    assert!(draw(58, 4).name.ends_with("-law") && draw(58, 7).name.ends_with("-analytic"));
+    // one law fabric in four is measured by a triangle model
+    let tri = draw(58, 6);
+    assert!(tri.lab.is_some() && tri.name.ends_with(tri.lab.unwrap().name()));
+    assert!(draw(58, 4).lab.is_none() && draw(58, 7).lab.is_none());
 }
 
 #[test]
