@@ -229,6 +229,7 @@ pub fn fit_tri(
         undetermined.push("bend_diag");
         notes.push("bend_diag is the geometric mean of bend_warp and bend_weft: warp and weft cantilevers do not determine it".into());
     }
+    finite(&material)?;
     let tests = report(&targets, &material, shapes_fitted);
     Ok(TriFit {
         material,
@@ -280,6 +281,28 @@ fn tri_targets(data: &FabricDataset, opts: &TriFitOptions) -> Result<Vec<Target>
         targets.push(Target::Shape(Box::new(ShapeTarget::new(sh, opts.points)?)));
     }
     Ok(targets)
+}
+
+/// Refuses a fitted material with a stiffness or coupling that is not a finite number (or a
+/// negative stiffness): such a value is never written into a material file.
+fn finite(m: &TriMaterial) -> Result<(), String> {
+    use crate::tri::params::COMPONENTS;
+    for (name, curve) in COMPONENTS.iter().zip(&m.curves) {
+        if let Some(v) = curve.k.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(format!(
+                "the {} fit ended with {name} = {v}: no material written",
+                m.kind.name()
+            ));
+        }
+    }
+    if !m.coupling.is_finite() {
+        return Err(format!(
+            "the {} fit ended with coupling = {}: no material written",
+            m.kind.name(),
+            m.coupling
+        ));
+    }
+    Ok(())
 }
 
 pub(super) fn tie_diagonal(m: &mut TriMaterial) {

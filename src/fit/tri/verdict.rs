@@ -62,7 +62,8 @@ pub fn over(tests: &[TestFit], max_error: f64) -> Vec<String> {
         .filter_map(|i| {
             let e = judged(tests, i)?;
             let t = &tests[i];
-            (e > max_error).then(|| match (&t.shape, &t.curve) {
+            // an error that is not finite (a test that does not solve) is never within it
+            (e.is_nan() || e > max_error).then(|| match (&t.shape, &t.curve) {
                 (Some(s), _) => format!("shape {} ({:.1} %)", s.scene, 100.0 * e),
                 (None, Some(c)) => format!("{} {}° {c} ({:.1} %)", t.kind, t.angle_deg, 100.0 * e),
                 (None, None) => format!("{} {}° ({:.1} %)", t.kind, t.angle_deg, 100.0 * e),
@@ -113,6 +114,11 @@ mod tests {
         // one strip alone, 15 % off, fails; the same as a validation test does not
         assert_eq!(over(&[strip("a", &[0.15, 0.15], true)], 0.10).len(), 1);
         assert!(over(&[strip("a", &[0.15, 0.15], false)], 0.10).is_empty());
+    }
+
+    #[test]
+    fn a_test_that_does_not_solve_is_over_any_error() {
+        assert_eq!(over(&[strip("a", &[f64::NAN, f64::NAN], true)], 0.10).len(), 1);
     }
 
     #[test]
