@@ -279,8 +279,10 @@ mod tests {
     /// The bundled cotton's warp cantilever (25 × 59.7 mm, 8 × 20 faces) on the springs
     /// material its fit reached: at the converted bending stiffness the cantilever hangs too far
     /// to solve, so the stage has no Jacobian there; it starts where the cantilever solves and
-    /// fits the drape angle.
+    /// fits the drape angle. Six minutes on two cores (each failing solve runs its 500 Newton
+    /// iterations), so CI leaves it out: `cargo test --lib -- --ignored a_stage_whose_start`.
     #[test]
+    #[ignore = "six minutes on two cores; run with --ignored"]
     fn a_stage_whose_start_does_not_solve_starts_where_it_does() {
         use crate::scene::TriCantilever;
         let s = |k: Vec<f64>| Stiffness::spline(0.0, 0.08, k).unwrap();
