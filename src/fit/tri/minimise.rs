@@ -264,7 +264,11 @@ mod tests {
     fn a_refined_spline_keeps_its_values_positive() {
         // 1, 1, 100 over 8 %: the Hermite spline dips to −5.19 at 2 %, which a spline refuses
         let old = Stiffness::spline(0.0, 0.08, vec![1.0, 1.0, 100.0]).unwrap();
-        assert!((old.at(0.02).0 + 5.1875).abs() < 1e-12, "{}", old.at(0.02).0);
+        assert!(
+            (old.at(0.02).0 + 5.1875).abs() < 1e-12,
+            "{}",
+            old.at(0.02).0
+        );
         let raw: Vec<f64> = (0..5).map(|j| old.at(0.02 * j as f64).0).collect();
         assert!(Stiffness::spline(0.0, 0.08, raw).is_err());
         // resampled, the dip is held at 1 % of the largest value

@@ -118,7 +118,10 @@ mod tests {
 
     #[test]
     fn a_test_that_does_not_solve_is_over_any_error() {
-        assert_eq!(over(&[strip("a", &[f64::NAN, f64::NAN], true)], 0.10).len(), 1);
+        assert_eq!(
+            over(&[strip("a", &[f64::NAN, f64::NAN], true)], 0.10).len(),
+            1
+        );
     }
 
     #[test]
