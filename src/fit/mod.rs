@@ -70,6 +70,7 @@ use joint::StageSets;
 use stages::StageMode;
 mod surrogate;
 mod thickness;
+pub mod toe;
 mod tolerances;
 pub mod tri;
 pub mod uncertainty;

@@ -2,19 +2,11 @@
 //! and the strips the model solves (one per angle and geometry, shared by its repeats, solved
 //! at a few elongation nodes and interpolated to every measured point).
 //!
-//! **Toe compensation.** A hand-mounted strip starts slack (the force rises slowly until the
-//! strip is taut) or preloaded (a force at zero elongation). Both shift the elongation axis.
-//! The start of the curve (the points from 2 % to 40 % of the largest force, widened to 60, 80
-//! and 100 % where fewer than 8 points lie there; below 2 % a slack strip creeps) is fitted
-//! twice by least squares: by a cubic through the origin, and by a hinge, zero up to an
-//! elongation s and a cubic in (e − s) after it, s found by a search. When the hinge fits at
-//! least ten times better (residual sum of squares) the curve has a toe (a slack one only when
-//! at least two measured points lie below s: the creep must be in the data): its zero moves to
-//! s (the tangent of the steep region extended to zero force, in the limit of a sharp knee),
-//! points below it are dropped, the rest shifted, and the strip's rest length taken as
-//! gauge + s (a slack strip is that much longer, a preloaded one that much shorter). A smooth
-//! curve through the origin, stiffening or not, is fitted by the cubic already and keeps its
-//! zero. s < 0 is a preload.
+//! **Toe compensation.** Each curve's toe s (slack, or a preload when negative) is found by
+//! [`detect_toe`] (the rules are in [`super::toe`]) unless the test gives `toe_mm`: the
+//! curve's zero moves to s, points below it are dropped, the rest shifted, and the strip's rest
+//! length taken as gauge + s (a slack strip is that much longer, a preloaded one that much
+//! shorter).
 
 use super::FitError;
 use crate::dataset::{FabricDataset, Role, TensileTest};
@@ -86,96 +78,7 @@ pub struct Prepared {
     pub misfit: super::Misfit,
 }
 
-/// Least-squares residual of a cubic in (e − s)₊ without a constant (points with e ≤ s
-/// predicted as 0).
-fn cubic_rss(pts: &[(f64, f64)], s: f64) -> f64 {
-    let scale = pts.last().map_or(1.0, |p| p.0.abs().max(1e-12));
-    let mut ata = nalgebra::Matrix3::<f64>::zeros();
-    let mut atb = nalgebra::Vector3::<f64>::zeros();
-    for &(e, f) in pts {
-        let x = ((e - s) / scale).max(0.0);
-        let row = nalgebra::Vector3::new(x, x * x, x * x * x);
-        ata += row * row.transpose();
-        atb += row * f;
-    }
-    let Some(c) = ata.try_inverse().map(|inv| inv * atb) else {
-        return f64::INFINITY;
-    };
-    pts.iter()
-        .map(|&(e, f)| {
-            let x = ((e - s) / scale).max(0.0);
-            let r = c[0] * x + c[1] * x * x + c[2] * x * x * x - f;
-            r * r
-        })
-        .sum()
-}
-
-/// Forces below this fraction of the largest are a slack strip's creep, not the steep region.
-const TOE_FLOOR: f64 = 0.02;
-
-/// The toe of a curve (m; negative: a preload), or 0 when it has none (module doc).
-pub fn detect_toe(elongation: &[f64], force: &[f64]) -> f64 {
-    let fmax = force.iter().copied().fold(0.0, f64::max);
-    if fmax <= 0.0 {
-        return 0.0;
-    }
-    let mut pts: Vec<(f64, f64)> = Vec::new();
-    for frac in [0.4, 0.6, 0.8, 1.0] {
-        // the creep of a slack strip (forces under 2 % of the largest) is left out: the zero
-        // is where the steep region's curve, extended, reaches zero force
-        pts = elongation
-            .iter()
-            .zip(force)
-            .take_while(|(_, &f)| f <= frac * fmax)
-            .filter(|(_, &f)| f >= TOE_FLOOR * fmax)
-            .map(|(&e, &f)| (e, f))
-            .collect();
-        if pts.len() >= 8 {
-            break;
-        }
-    }
-    if pts.len() < 6 {
-        return 0.0;
-    }
-    let e_end = pts.last().map_or(0.0, |p| p.0);
-    // the search may reach back to the first measured point (a slack strip's zero lies
-    // ahead of the steep region)
-    let rss0 = cubic_rss(&pts, 0.0);
-    // s from a preload of a quarter of the region to three quarters of it: a grid, then
-    // golden-section refinement around the best grid point
-    let (lo, hi) = (-0.25 * e_end, 0.75 * e_end);
-    let n = 60;
-    let grid: Vec<f64> = (0..=n)
-        .map(|k| lo + (hi - lo) * k as f64 / n as f64)
-        .collect();
-    let k = (0..grid.len())
-        .min_by(|&i, &j| cubic_rss(&pts, grid[i]).total_cmp(&cubic_rss(&pts, grid[j])))
-        .unwrap_or(0);
-    let h = (hi - lo) / n as f64;
-    let (mut a, mut b) = (grid[k] - h, grid[k] + h);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..40 {
-        let (c, d) = (b - g * (b - a), a + g * (b - a));
-        if cubic_rss(&pts, c) < cubic_rss(&pts, d) {
-            b = d;
-        } else {
-            a = c;
-        }
-    }
-    let s = 0.5 * (a + b);
-    let rss = cubic_rss(&pts, s);
-    let total: f64 = pts.iter().map(|p| p.1 * p.1).sum();
-    // a hinge has one parameter more than the cubic: it must fit ten times better, beyond
-    // round-off; slack also needs measured evidence: two points or more below the new zero
-    // (the creep), or a smooth stiffening curve sampled coarsely could pass for slack
-    let creep = elongation.iter().filter(|&&e| e < s).count();
-    let better = rss * 10.0 < rss0 && rss0 > 1e-5 * total;
-    if better && (s < 0.0 || creep >= 2) {
-        s
-    } else {
-        0.0
-    }
-}
+pub use super::toe::detect_toe;
 
 /// Points of the local interpolant: six, a quintic (see [`nodes_for`] for why not a cubic).
 pub const STENCIL: usize = 6;
@@ -431,38 +334,6 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn curve(f: impl Fn(f64) -> f64, emax: f64, n: usize) -> (Vec<f64>, Vec<f64>) {
-        let e: Vec<f64> = (0..=n).map(|k| emax * k as f64 / n as f64).collect();
-        let force = e.iter().map(|&x| f(x)).collect();
-        (e, force)
-    }
-
-    #[test]
-    fn smooth_curves_through_the_origin_keep_their_zero() {
-        // linear, stiffening (J-shaped, as crimp gives), and a law that softens
-        for f in [
-            &(|x: f64| 4000.0 * x) as &dyn Fn(f64) -> f64,
-            &|x: f64| 2e3 * x + 4e6 * x * x + 3e9 * x * x * x,
-            &|x: f64| 1e4 * x - 2e6 * x * x,
-        ] {
-            let (e, force) = curve(f, 3e-3, 40);
-            assert_eq!(detect_toe(&e, &force), 0.0);
-        }
-    }
-
-    #[test]
-    fn slack_and_preload_are_found() {
-        // 1 mm of slack before a stiffening curve; a preload of 0.3 mm equivalent
-        let slack = 1e-3;
-        let law = |x: f64| 8e3 * x + 2e6 * x * x;
-        let (e, force) = curve(|x| if x > slack { law(x - slack) } else { 0.0 }, 6e-3, 60);
-        let s = detect_toe(&e, &force);
-        assert!((s - slack).abs() < 0.03e-3, "{s}");
-        let (e, force) = curve(|x| law(x + 0.3e-3), 5e-3, 50);
-        let s = detect_toe(&e, &force);
-        assert!((s + 0.3e-3).abs() < 0.03e-3, "{s}");
-    }
 
     /// A strip with no more distinct measured elongations (over all its curves) than nodes is
     /// solved at them; one with more gets the Chebyshev–Lobatto nodes, as do repeats whose
