@@ -364,8 +364,6 @@ fn flat_noisy_slack_is_found_at_every_angle_and_the_stiffnesses_stay() {
             s(&fitted),
             "--mesh-ladder",
             "4x6",
-            "--test-meshes",
-            "ladder",
             "--mesh-check",
             "off",
             "--quiet",
