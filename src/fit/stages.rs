@@ -221,7 +221,7 @@ impl Fitter<'_> {
             stiffness_only,
         )
         .map_err(stage_failed(map, level))?;
-        self.add_counts(&sp.counts);
+        self.stats.record(sp.counts.work());
         map.decode(&p, &mut self.law);
         let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
         let shape = self.stage_optimum(&sp, &p, err);
@@ -336,7 +336,7 @@ impl Fitter<'_> {
             None => false,
         };
         if (mode == StageMode::Raise && m.kept == 0) || screened_out {
-            self.add_counts(&sp.counts);
+            self.stats.record(sp.counts.work());
             self.log_degree(note);
             for (key, rig) in std::mem::take(&mut sp.rigs) {
                 self.keep_rig(key, rig);
@@ -361,17 +361,6 @@ impl Fitter<'_> {
             ));
         }
         p
-    }
-
-    /// Adds a stage's work to the fit's statistics.
-    fn add_counts(&mut self, c: &Counts) {
-        self.stats.record(Work {
-            evaluations: c.evals,
-            equilibria: c.solved,
-            newton_iterations: c.newton,
-            unstable: c.unstable,
-            bootstrap_evaluations: 0,
-        });
     }
 
     /// At the stage's optimum p: records the standard errors and the linearisation from the

@@ -166,7 +166,7 @@ fn the_table_shows_the_judged_error_beside_the_verdict() {
         b.ends_with(&format!("ok {:>12}", format!("{judged:.2} %"))),
         "{b}"
     );
-    // every row has one more column than before, aligned under its header
+    // every row ends with the judged_error column, aligned under its header
     let end = lines[0].len();
     for l in &lines[1..=r.tests.len()] {
         assert_eq!(l.len(), end, "{l}");

@@ -23,6 +23,19 @@ pub(in crate::fit) struct Counts {
     pub solved: usize,
 }
 
+impl Counts {
+    /// The solver work these counts record.
+    pub fn work(&self) -> super::Work {
+        super::Work {
+            evaluations: self.evals,
+            equilibria: self.solved,
+            newton_iterations: self.newton,
+            unstable: self.unstable,
+            bootstrap_evaluations: 0,
+        }
+    }
+}
+
 /// A tensile stage's strips on one mesh level, solved at the variables q over the law `base`
 /// (the map's variables decoded into it) and the thickness `tau`.
 pub(in crate::fit) struct StageProblem<'a> {
