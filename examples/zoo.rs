@@ -308,11 +308,30 @@ fn summary(dir: &Path) -> Result<String, String> {
         );
     }
     s += &truth_table(dir, &fits);
+    s += &unbuilt(dir);
     s += "\n## Fits that ended without a material\n\n";
     for f in run.iter().filter(|f| !f.has_material) {
         let _ = writeln!(s, "* {} ({}, {}): {}", f.fabric, f.model, f.status, f.error);
     }
     Ok(s)
+}
+
+/// The zoo's fabrics the virtual lab could not measure (`zoo.csv`'s `built` column).
+fn unbuilt(dir: &Path) -> String {
+    let text = std::fs::read_to_string(dir.join("zoo.csv")).unwrap_or_default();
+    let rows: Vec<&str> = text.lines().filter(|l| l.contains(",\"no: ")).collect();
+    let mut s = format!(
+        "\n## Fabrics not built\n\n{} of the drawn fabrics could not be measured by the virtual lab (so are not fitted):\n\n",
+        rows.len()
+    );
+    for r in rows {
+        let name = r.split(',').next().unwrap_or("");
+        let why = r
+            .split_once(",\"no: ")
+            .map_or("", |w| w.1.trim_end_matches('"'));
+        let _ = writeln!(s, "* {name}: {why}");
+    }
+    s
 }
 
 /// The shell fits of law fabrics against their truth: |fitted/true − 1| per quantity.
