@@ -17,7 +17,7 @@ for kind in clean lab; do
   dir=$WORK/$kind
   flag=()
   if [ "$kind" = clean ]; then flag=(--clean); fi
-  target/release/examples/zoo generate "$dir" --count "$DRAWS" --seed "$SEED" "${flag[@]}"
+  target/release/examples/zoo generate "$dir" --count "$DRAWS" --seed "$SEED" --models-every 20 "${flag[@]}"
   # a fit that ends FIT FAILED exits 3 and the batch goes on; the summary counts it
   target/release/ks-fit batch "$dir/manifest.csv" --out "$dir/fits" || true
   target/release/examples/zoo summary "$dir" > "paper_repro/zoo/summary-$kind.md"
