@@ -153,6 +153,12 @@ fn lab_curve(fabric: &ZooFabric, cut: f64) -> Result<Vec<(f64, f64)>, SynthError
                 .collect()
         }
     };
+    if !forces.iter().any(|&f| f > 0.0) {
+        return Err(SynthError::Options(format!(
+            "the strip cut at {cut:.2}° carries no force up to {:.3} mm: no curve to write",
+            top * 1e3
+        )));
+    }
     let mut curve = vec![(0.0, 0.0)];
     curve.extend(elongations.into_iter().zip(forces));
     Ok(curve)

@@ -126,3 +126,17 @@ fn an_analytic_fabric_builds_a_dataset_with_its_artefacts() {
     assert!(z.curves[0].1.starts_with("elongation_mm,force_n\n"));
     assert_eq!(z.data.bend.len(), if f.protocol.bends { 2 } else { 0 });
 }
+
+#[test]
+fn a_strip_that_carries_no_force_is_not_written() {
+    let mut f = draw(11, 1);
+    if let Source::Analytic { warp, .. } = &mut f.source {
+        *warp = Family::Quadratic {
+            stiffness: 0.0,
+            c: 1.0,
+        };
+    }
+    f.protocol.angles = vec![90.0];
+    let err = build(&f, &mut |_| {}).unwrap_err().to_string();
+    assert!(err.contains("carries no force"), "{err}");
+}
