@@ -23,6 +23,21 @@ pub struct Level {
     pub order: Option<f64>,
 }
 
+impl Level {
+    /// A solved level, before the study's differences, orders and estimates.
+    pub fn solved(mesh: (usize, usize), dofs: usize, seconds: f64, qoi: f64) -> Self {
+        Level {
+            mesh,
+            dofs,
+            seconds,
+            qoi,
+            diff_to_next: None,
+            est_error: None,
+            order: None,
+        }
+    }
+}
+
 /// A whole study.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Study {
@@ -104,15 +119,7 @@ pub fn study<E>(
     for &mesh in ladder {
         let t0 = Instant::now();
         let (qoi, dofs) = scene(mesh)?;
-        let level = Level {
-            mesh,
-            dofs,
-            seconds: t0.elapsed().as_secs_f64(),
-            qoi,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        };
+        let level = Level::solved(mesh, dofs, t0.elapsed().as_secs_f64(), qoi);
         progress(&level);
         levels.push(level);
     }
@@ -139,10 +146,27 @@ pub fn analyse(mut levels: Vec<Level>) -> Study {
             extrapolated = Some(q2);
         }
     }
-    if let Some(q) = extrapolated {
-        for l in &mut levels {
-            l.est_error = Some(((l.qoi - q) / q).abs());
-        }
+    with_limit(levels, extrapolated)
+}
+
+/// As [`analyse`], but the limit comes only from a monotone, contracting finest triple
+/// ([`monotone_limit`]): the stricter estimate, for a mesh chosen without a person to read
+/// the table (the synthetic cantilevers' overhang search).
+pub fn analyse_monotone(levels: Vec<Level>) -> Study {
+    let n = levels.len();
+    let limit = if n >= 3 {
+        monotone_limit(levels[n - 3].qoi, levels[n - 2].qoi, levels[n - 1].qoi)
+    } else {
+        None
+    };
+    let levels = analyse(levels).levels;
+    with_limit(levels, limit)
+}
+
+/// The study of `levels` with the limit `extrapolated`: each level's estimated relative error.
+fn with_limit(mut levels: Vec<Level>, extrapolated: Option<f64>) -> Study {
+    for l in &mut levels {
+        l.est_error = extrapolated.map(|q| ((l.qoi - q) / q).abs());
     }
     Study {
         levels,
@@ -467,15 +491,7 @@ mod tests {
     fn levels(qois: &[f64]) -> Vec<Level> {
         qois.iter()
             .enumerate()
-            .map(|(k, &qoi)| Level {
-                mesh: (4 << k, 6 << k),
-                dofs: 0,
-                seconds: 0.0,
-                qoi,
-                diff_to_next: None,
-                est_error: None,
-                order: None,
-            })
+            .map(|(k, &qoi)| Level::solved((4 << k, 6 << k), 0, 0.0, qoi))
             .collect()
     }
 
@@ -507,5 +523,27 @@ mod tests {
             Chosen::NoEstimate
         );
         assert_eq!(flat.choose(100.0, ErrorMeasure::Relative).index(3), 2);
+    }
+
+    #[test]
+    fn the_monotone_study_gives_no_estimate_for_an_oscillating_ladder() {
+        // monotone and contracting: the same limit and choice as the plain study
+        let plain = analyse(levels(&[10.0, 11.0, 11.5]));
+        let strict = analyse_monotone(levels(&[10.0, 11.0, 11.5]));
+        assert_eq!(strict, plain);
+        // 10, 11, 10.5 contracts but oscillates: the plain study extrapolates, the strict
+        // one does not
+        let plain = analyse(levels(&[10.0, 11.0, 10.5]));
+        assert!(plain.extrapolated.is_some());
+        let strict = analyse_monotone(levels(&[10.0, 11.0, 10.5]));
+        assert_eq!(strict.extrapolated, None);
+        assert!(strict.levels.iter().all(|l| l.est_error.is_none()));
+        assert_eq!(
+            strict.choose(100.0, ErrorMeasure::Absolute),
+            Chosen::NoEstimate
+        );
+        // the orders and differences are the plain study's
+        assert_eq!(strict.levels[1].order, plain.levels[1].order);
+        assert_eq!(strict.levels[0].diff_to_next, Some(1.0));
     }
 }

@@ -339,15 +339,7 @@ pub fn compare_on(
     let shell_levels: Vec<Level> = raw
         .iter()
         .filter(|r| r.model == "kl")
-        .map(|r| Level {
-            mesh: r.mesh,
-            dofs: 0,
-            seconds: r.seconds,
-            qoi: r.value,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        })
+        .map(|r| Level::solved(r.mesh, 0, r.seconds, r.value))
         .collect();
     let (reference, reference_from) = reference(test, shell_levels);
     let runs = raw

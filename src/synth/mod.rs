@@ -8,12 +8,14 @@
 //! * Two cantilevers (90° and 0°), 25 mm wide, each at the overhang whose drape angle is 41.5°
 //!   (to 1e-4°): bracketed from twice the bending length c = (D/(ρg))^⅓, D = a·τ³/12 (a11 for
 //!   the warp, a22 for the weft; the material's own rigidity when it has a `[bending]` table),
-//!   then refined by secant steps in ln(overhang), kept inside the bracket. The mesh is chosen
-//!   as `ks-fit bend` chooses its own: the overhang found on ladder level 0 ([`bend_mesh`]:
-//!   elements of about 6.25 × 3.1 mm) is solved on two meshes twice and four times as fine,
-//!   and the search repeated on the coarsest whose Richardson estimate of the angle error is
-//!   below [`BEND_TOL_DEG`] (0.01°); the dataset's notes name the mesh and the estimate, and
-//!   `ks-fit bend --mesh` on that mesh at the written overhang reproduces 41.5°.
+//!   then refined by secant steps in ln(overhang), kept inside the bracket. The mesh is kept
+//!   by the rule of `ks-fit bend`'s own ([`crate::converge::Study::choose`]): the overhang
+//!   found on ladder level 0 ([`bend_mesh`]: elements of about 6.25 × 3.1 mm) is solved on two
+//!   meshes twice and four times as fine, and the search repeated on the coarsest whose
+//!   Richardson estimate of the angle error is below [`BEND_TOL_DEG`] (0.01°), the estimate
+//!   only from a monotone ladder ([`crate::converge::analyse_monotone`]); the dataset's notes
+//!   name the mesh and the estimate, and `ks-fit bend --mesh` on that mesh at the written
+//!   overhang reproduces 41.5°.
 //! * `repeats` curves per tensile angle. With `noise` = REL each repeat's forces are scaled by
 //!   one factor 1 + REL·z (z standard normal, the factor held at ≥ 0) and each point by
 //!   1 + REL/10·z; with `misalign_deg` each repeat's strip is cut at its nominal angle + DEG·z

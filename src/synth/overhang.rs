@@ -2,6 +2,7 @@
 //! 41.5°, on the mesh `ks-fit bend` would choose (see the module doc of `synth`).
 
 use super::*;
+use crate::converge::ErrorMeasure;
 
 /// The overhang (m) whose drape angle is 41.5° for a cantilever cut at `angle`: searched on
 /// ladder level 0, the angle there checked on levels 1 and 2, and searched again on the
@@ -56,16 +57,13 @@ pub(super) fn find_overhang(
             })?;
         ladder.push((mesh, a));
     }
-    let n = ladder.len();
-    let limit = crate::converge::monotone_limit(ladder[n - 3].1, ladder[n - 2].1, ladder[n - 1].1);
-    let errors: Vec<Option<f64>> = ladder
+    let levels = ladder
         .iter()
-        .map(|(_, a)| limit.map(|q| (a - q).abs()))
+        .map(|&(mesh, qoi)| crate::converge::Level::solved(mesh, 0, 0.0, qoi))
         .collect();
-    let k = errors
-        .iter()
-        .position(|e| e.is_some_and(|e| e < BEND_TOL_DEG))
-        .unwrap_or(n - 1);
+    let chosen =
+        crate::converge::analyse_monotone(levels).choose(BEND_TOL_DEG, ErrorMeasure::Absolute);
+    let k = chosen.index(ladder.len());
     let (mesh, angle_deg, overhang) = if k == 0 {
         (mesh0, angle0, overhang)
     } else {
@@ -77,7 +75,7 @@ pub(super) fn find_overhang(
         overhang,
         angle_deg,
         mesh,
-        error_deg: errors[k],
+        error_deg: chosen.error(),
         ladder,
     })
 }

@@ -70,15 +70,7 @@ pub fn auto_bend(
     }
     let levels = runs
         .iter()
-        .map(|(mesh, r, secs)| kshell::converge::Level {
-            mesh: *mesh,
-            dofs: 0,
-            seconds: *secs,
-            qoi: r.drape_angle_deg,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        })
+        .map(|(mesh, r, secs)| kshell::converge::Level::solved(*mesh, 0, *secs, r.drape_angle_deg))
         .collect();
     let chosen = kshell::converge::analyse(levels).choose(tol, ErrorMeasure::Absolute);
     let i = chosen.index(runs.len());

@@ -400,15 +400,7 @@ pub fn cmd_scene(scene: ShowScene, force: bool) -> Result<(), String> {
 fn choose(scene: &ShowScene, tol: f64, runs: Vec<(usize, Run)>) -> (Run, Choice) {
     let levels: Vec<Level> = runs
         .iter()
-        .map(|(n, r)| Level {
-            mesh: (*n, *n),
-            dofs: 3 * r.shape.x().len(),
-            seconds: r.seconds,
-            qoi: r.qoi,
-            diff_to_next: None,
-            est_error: None,
-            order: None,
-        })
+        .map(|(n, r)| Level::solved((*n, *n), 3 * r.shape.x().len(), r.seconds, r.qoi))
         .collect();
     let study = analyse(levels);
     let chosen = study.choose(tol, ErrorMeasure::Relative);
