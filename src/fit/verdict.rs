@@ -41,11 +41,41 @@ pub struct Judgement {
     pub mark: &'static str,
 }
 
+/// The force scale s with measured ≈ s·model that best explains a curve's ratios
+/// q = model/measured (s = Σq/Σq² minimises Σ(s q − 1)²), and the mean |relative error| left
+/// after it: (s, scaled error). NaN for both when `q` is empty.
+pub(crate) fn force_scale(q: &[f64]) -> (f64, f64) {
+    let scale = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
+    let scaled = q.iter().map(|v| (scale * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
+    (scale, scaled)
+}
+
+/// A repeat's judged error (see the module doc): the larger of its error after its own scale
+/// and how far the model lies outside the repeats' scale band (0 when the smallest scale ≤ 1 ≤
+/// the largest).
+pub(crate) fn repeat_error(scaled: f64, scales: &[f64]) -> f64 {
+    let lo = scales.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = scales.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let outside = (lo - 1.0).max(1.0 - hi).max(0.0);
+    scaled.max(outside)
+}
+
+/// A bend's judged error: |drape angle − measured| / measured.
+pub(crate) fn drape_error(angle: f64, measured: f64) -> f64 {
+    (angle - measured).abs() / measured
+}
+
+/// Whether an error is over `max_error`; one that is not a number (a test that does not
+/// solve) always is.
+pub(crate) fn is_over(error: f64, max_error: f64) -> bool {
+    error > max_error || error.is_nan()
+}
+
 /// The error the verdict reads for test `i` of `r` (see the module doc).
 fn judged_error(r: &FitResult, i: usize) -> Option<f64> {
     let t = &r.tests[i];
     if let (Some(a), Some(g)) = (t.drape_angle_deg, t.target_drape_deg) {
-        return Some((a - g).abs() / g);
+        return Some(drape_error(a, g));
     }
     let siblings: Vec<&TestOutcome> = r
         .tests
@@ -61,13 +91,8 @@ fn judged_error(r: &FitResult, i: usize) -> Option<f64> {
         return t.avg_rel_error;
     }
     let scales: Vec<f64> = siblings.iter().filter_map(|o| o.repeat_scale).collect();
-    let lo = scales.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = scales.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     match t.avg_rel_error_scaled {
-        Some(shape) if !scales.is_empty() => {
-            let outside = (lo - 1.0).max(1.0 - hi).max(0.0);
-            Some(shape.max(outside))
-        }
+        Some(shape) if !scales.is_empty() => Some(repeat_error(shape, &scales)),
         _ => t.avg_rel_error,
     }
 }
@@ -80,7 +105,7 @@ pub fn judge(r: &FitResult, max_error: f64) -> Vec<Judgement> {
             let error = judged_error(r, i);
             let mark = match error {
                 None => "-",
-                Some(e) if e > max_error || e.is_nan() => {
+                Some(e) if is_over(e, max_error) => {
                     if t.used_in_fit {
                         "OVER"
                     } else {

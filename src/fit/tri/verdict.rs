@@ -9,6 +9,7 @@
 //! / measured, a fitted shape by its descriptor's relative error.
 
 use super::TestFit;
+use crate::fit::verdict::{drape_error, force_scale, is_over, repeat_error};
 
 /// The scale s with measured ≈ s·model that best explains a curve whose relative residuals
 /// are `r` (model/measured = 1 + r; s = Σq/Σq² minimises Σ(s q − 1)²), and the mean |relative
@@ -22,16 +23,14 @@ pub fn repeat_scale(r: &[f64]) -> Option<(f64, f64)> {
     if q.is_empty() {
         return None;
     }
-    let s = q.iter().sum::<f64>() / q.iter().map(|v| v * v).sum::<f64>();
-    let scaled = q.iter().map(|v| (s * v - 1.0).abs()).sum::<f64>() / q.len() as f64;
-    Some((s, scaled))
+    Some(force_scale(&q))
 }
 
 /// The error the verdict reads for test `i` (see the module doc).
 fn judged(tests: &[TestFit], i: usize) -> Option<f64> {
     let t = &tests[i];
     if let Some((a, g)) = t.drape_angle_deg {
-        return Some((a - g).abs() / g);
+        return Some(drape_error(a, g));
     }
     if let Some(s) = &t.shape {
         return Some(s.error);
@@ -46,10 +45,7 @@ fn judged(tests: &[TestFit], i: usize) -> Option<f64> {
                 .iter()
                 .filter_map(|o| o.scale.map(|s| s.0))
                 .collect();
-            let lo = scales.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = scales.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let band = (lo - 1.0).max(1.0 - hi).max(0.0);
-            Some(scaled.max(band))
+            Some(repeat_error(scaled, &scales))
         }
         _ => t.avg_rel_error,
     }
@@ -62,8 +58,7 @@ pub fn over(tests: &[TestFit], max_error: f64) -> Vec<String> {
         .filter_map(|i| {
             let e = judged(tests, i)?;
             let t = &tests[i];
-            // an error that is not finite (a test that does not solve) is never within it
-            (e.is_nan() || e > max_error).then(|| match (&t.shape, &t.curve) {
+            is_over(e, max_error).then(|| match (&t.shape, &t.curve) {
                 (Some(s), _) => format!("shape {} ({:.1} %)", s.scene, 100.0 * e),
                 (None, Some(c)) => format!("{} {}° {c} ({:.1} %)", t.kind, t.angle_deg, 100.0 * e),
                 (None, None) => format!("{} {}° ({:.1} %)", t.kind, t.angle_deg, 100.0 * e),
