@@ -24,6 +24,11 @@ pub const FFT_GRID: usize = 32;
 /// Samples of the shell's limit surface along each face edge.
 const SHELL_SAMPLES: usize = 2;
 
+/// Largest relative shape error at the optimum that a fit (shell or triangle model) trusts:
+/// beyond it the model has not found the captured shape (another branch of wrinkles, or
+/// another kind of sheet).
+pub const SHAPE_TRUST: f64 = 0.25;
+
 /// A captured shape prepared for the fit.
 #[derive(Clone, Debug)]
 pub struct ShapeTarget {

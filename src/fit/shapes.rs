@@ -21,7 +21,7 @@
 use super::{FitError, Fitter, Work};
 use crate::dataset::FabricDataset;
 use crate::fit::shape_target::ShapeTarget;
-use crate::fit::tri::SHAPE_TRUST;
+use crate::fit::shape_target::SHAPE_TRUST;
 use crate::material::FabricMaterial;
 use std::collections::HashMap;
 use std::time::Instant;

@@ -31,9 +31,9 @@ mod shapes;
 mod stages;
 pub mod verdict;
 
+pub use crate::fit::shape_target::SHAPE_TRUST;
 pub use minimise::SPLINE_FLOOR;
 use shapes::shape_stage;
-pub use shapes::SHAPE_TRUST;
 use stages::{StageSets, TriRun};
 
 /// Fit settings.

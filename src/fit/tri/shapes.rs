@@ -3,6 +3,7 @@
 
 use super::minimise::{levenberg_marquardt, scan};
 use super::Target;
+use crate::fit::shape_target::SHAPE_TRUST;
 use crate::tri::TriMaterial;
 
 /// The components of [`TriMaterial::curves`] by the names of [`super::TriFit::undetermined`].
@@ -72,7 +73,3 @@ pub(super) fn shape_stage(
     }
     true
 }
-
-/// Largest relative shape error at the optimum that the fit trusts: beyond it the model has
-/// not found the captured shape (another branch of wrinkles, or another kind of sheet).
-pub const SHAPE_TRUST: f64 = 0.25;
