@@ -1,7 +1,6 @@
 #!/usr/bin/env bash
-# Stiff yarns over a soft shear, fitted from data made on a finer cage than any the fit uses
-# (issue "a material you can trust", items 1 and 4): noise-free strips and cantilevers made by
-# `synth` on graded 64x96 cages (twice as fine as the fit's finest own mesh, 32x48) from two
+# Stiff yarns over a soft shear, fitted from data made on a finer cage than any the fit uses:
+# noise-free strips and cantilevers made by `synth` on graded 64x96 cages (twice as fine as the fit's finest own mesh, 32x48) from two
 # linear materials the fit does not start near (yarn-to-shear ratios 1000 and 2e4; the
 # dataset's thickness twice the true one), fitted with the default ladder under each yarn rule.
 # Prints each fit's relative error in G12, a11, a22 and the thickness, its mesh_change and

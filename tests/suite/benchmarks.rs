@@ -1,4 +1,4 @@
-//! Published shell benchmarks (issue: convergence studies). Each assertion cites its reference
+//! Published shell benchmarks for the convergence studies. Each assertion cites its reference
 //! value; the larger sweeps are `cargo run --release --example plates`.
 
 use kshell::scene::plate::{SquarePlate, Support};

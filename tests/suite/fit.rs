@@ -291,7 +291,7 @@ fn check_report_page(path: &std::path::Path, tests: usize, angles: usize) {
     assert_eq!(plots, angles, "one inline plot per cut angle");
 }
 
-/// Bending of its own (issue: "a material you can trust", item 3): a fabric twice as stiff in
+/// Bending of its own: a fabric twice as stiff in
 /// bending across the weft as along the warp, although its warp is the stiffer in tension
 /// (ratios 0.5 and 1.7). The paper's one thickness cannot drape both cantilevers at 41.5°;
 /// the default (orthotropic, both bends present) fits both and recovers the rigidities.
@@ -426,7 +426,7 @@ fn the_fit_is_the_same_on_one_thread_and_on_several() {
     assert_eq!(one, several);
 }
 
-/// The mesh check (issue "a material you can trust", item 1): fitted on 4 × 6, the check's
+/// The mesh check: fitted on 4 × 6, the check's
 /// first-order refit on 8 × 12 (`--mesh-check fine`) must predict what refitting on 8 × 12
 /// actually gives, and the default check (solved on the coarser mesh, carried to the finer one
 /// at order 1.5) must agree with the measured one. Measured when written: G12 +28.6 %
@@ -515,7 +515,7 @@ fn the_mesh_check_predicts_the_refit_on_the_finer_mesh() {
     );
 }
 
-/// The ladder (issue "a material you can trust", item 1): the next level is solved at the last
+/// The ladder: the next level is solved at the last
 /// fit first; it is skipped, with every later one, when refitting on it would change no
 /// determined parameter by 1 % and no curve by 0.3 %, and that measured check is the one the
 /// fit reports. Where it is needed, a stage the refinement left unchanged is not refitted.
@@ -586,8 +586,8 @@ fn the_ladder_refines_only_what_the_refit_check_says_changes() {
     );
 }
 
-/// Each test's mesh is its own (issue "real lab data", item 8), on data the fit did not make
-/// from a material it does not start near (issue "a material you can trust", item 4): stiff
+/// Each test's mesh is its own, on data the fit did not make from a material it does not
+/// start near: stiff
 /// yarns over a soft shear (a11/G12 = 1000, 10 and 50 times the fit's start), the dataset's
 /// measured thickness twice the true one, noise-free strips made on graded 32 × 48 cages, fitted
 /// from a 4 × 6 ladder, all on the full yarn rule (the paper's integration, which locks here;

@@ -1,6 +1,5 @@
 #!/usr/bin/env bash
-# Locking of nearly inextensible yarns (issue "a material you can trust", item 1): a 150 x 450 mm
-# bias-extension sample at 45°, a11 = a22 = 1e10 Pa (glass or aramid weaves), a12 = 0, a linear
+# Locking of nearly inextensible yarns: a 150 x 450 mm bias-extension sample at 45°, a11 = a22 = 1e10 Pa (glass or aramid weaves), a12 = 0, a linear
 # shear law with G12 = 3e4 Pa, 0.3 mm, pulled 20 mm, meshed along its own axes (uniform and graded
 # cages). Reference: the pin-jointed net of the bias-extension test (Harrison et al. 2004; Cao et
 # al. 2008 benchmark): D = L − W, shear angle γ = π/2 − 2 arccos((D + d)/(√2 D)) in the central
