@@ -114,8 +114,8 @@ const EXTRA_ANGLES: [f64; 6] = [15.0, 22.5, 30.0, 60.0, 67.5, 75.0];
 const MIN_SHEAR: f64 = 10.0;
 
 /// Tension per width at which a strip breaks, N/m: apparel wovens 5–20 kN/m, technical
-/// fabrics to 40 kN/m; the lab pulls no further than the yarns' small-strain stiffness would
-/// reach it.
+/// fabrics to 40 kN/m; the lab pulls no further than the stronger yarn's tension (of its own
+/// law, stiffening included) reaches it.
 const BREAK_TENSION: (f64, f64) = (5e3, 4e4);
 
 /// Standard gravity, m/s² (the bending length's weight).
@@ -155,11 +155,7 @@ pub fn draw(seed: u64, index: usize) -> ZooFabric {
     } else {
         draw_analytic(&mut rng)
     };
-    let yarns = match &source {
-        Source::Law(m) => m.law.a11.max(m.law.a22) * m.thickness,
-        Source::Analytic { warp, weft, .. } => warp.stiffness().max(weft.stiffness()),
-    };
-    let protocol = draw_protocol(&mut rng, law, yarns);
+    let protocol = draw_protocol(&mut rng, law, &|e| yarn_tension(&source, e));
     let lab = (law && index % 8 == 6).then(|| TriKind::ALL[rng.int(0, 3)].1);
     let kind = match (law, lab) {
         (true, None) => "law",
@@ -172,6 +168,43 @@ pub fn draw(seed: u64, index: usize) -> ZooFabric {
         protocol,
         lab,
     }
+}
+
+/// Tension per width (N/m) of the stronger yarn at engineering strain `e` along it: the law's
+/// first Piola stress (1 + e)·S(Ẽ) at Ẽ = e + e²/2 alone, times the thickness (a bound on what
+/// the strip carries: its other strains stay near zero), or the analytic family's own.
+fn yarn_tension(source: &Source, e: f64) -> f64 {
+    match source {
+        Source::Law(m) => {
+            let g = e + 0.5 * e * e;
+            let along = |k: usize| {
+                let mut strain = nalgebra::Vector3::zeros();
+                strain[k] = g;
+                crate::material::Law::response(&m.law, &strain)
+                    .map_or(f64::INFINITY, |r| r.stress[k])
+            };
+            (1.0 + e) * along(0).max(along(1)) * m.thickness
+        }
+        Source::Analytic { warp, weft, .. } => warp.force(1.0, e).max(weft.force(1.0, e)),
+    }
+}
+
+/// The largest strain in (0, `cap`] at which `tension` stays within `limit` (bisection; the
+/// tension rises with the strain).
+fn strain_at_tension(tension: &dyn Fn(f64) -> f64, limit: f64, cap: f64) -> f64 {
+    if tension(cap) <= limit {
+        return cap;
+    }
+    let (mut lo, mut hi) = (0.0, cap);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if tension(mid) <= limit {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
 }
 
 /// Membrane stiffnesses per width (N/m) of the stronger yarn, the weaker yarn and the shear.
@@ -276,7 +309,7 @@ fn draw_analytic(rng: &mut Rng) -> Source {
 /// How a lab tests: 3–9 angles, 1–5 repeats with scatter, noise, misalignment, slack or
 /// preload, kN exports, narrow and wide strips, 5–2,000 points, with and without bends; one
 /// law fabric in ten is a bias-extension sample alone with known yarns.
-fn draw_protocol(rng: &mut Rng, law: bool, yarns: f64) -> Protocol {
+fn draw_protocol(rng: &mut Rng, law: bool, tension: &dyn Fn(f64) -> f64) -> Protocol {
     let bias_only = law && rng.chance(0.1);
     let mut angles = vec![90.0, 0.0, 45.0];
     let extra = rng.int(0, EXTRA_ANGLES.len());
@@ -318,10 +351,11 @@ fn draw_protocol(rng: &mut Rng, law: bool, yarns: f64) -> Protocol {
         angles,
         repeats: rng.int(1, 5),
         points: rng.log_between(5.0, 2000.0).round() as usize,
-        max_strain: rng
-            .between(0.04, 0.15)
-            .min(rng.between(BREAK_TENSION.0, BREAK_TENSION.1) / yarns)
-            .max(0.01),
+        max_strain: {
+            let cap = rng.between(0.04, 0.15);
+            let limit = rng.between(BREAK_TENSION.0, BREAK_TENSION.1);
+            strain_at_tension(tension, limit, cap).max(0.01)
+        },
         strip,
         scale_noise: if rng.chance(0.3) {
             0.0

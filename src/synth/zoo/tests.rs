@@ -140,3 +140,24 @@ fn a_strip_that_carries_no_force_is_not_written() {
     let err = build(&f, &mut |_| {}).unwrap_err().to_string();
     assert!(err.contains("carries no force"), "{err}");
 }
+
+#[test]
+fn no_strip_is_pulled_past_the_tension_that_breaks_it() {
+    let mut stiffening = 0;
+    for i in 0..400 {
+        let f = draw(1, i);
+        let e = f.protocol.max_strain;
+        let t = yarn_tension(&f.source, e);
+        assert!(
+            e <= 0.01 || t <= BREAK_TENSION.1 * (1.0 + 1e-9),
+            "{}: {t} N/m at strain {e}",
+            f.name
+        );
+        // a stiffening law stops the pull before its small-strain stiffness would
+        if let Source::Law(m) = &f.source {
+            let small = m.law.a11.max(m.law.a22) * m.thickness * e;
+            stiffening += usize::from(t > 2.0 * small);
+        }
+    }
+    assert!(stiffening > 20, "{stiffening} law fabrics stiffen twofold");
+}
