@@ -75,7 +75,7 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<(), FitError> {
         let t0 = Instant::now();
-        let density = self.data.areal_density.unwrap_or(0.1);
+        let density = self.ctx.data.areal_density.unwrap_or(0.1);
         let ratio = bias_ratio(&self.law);
         let off_axis = bends.iter().any(|b| !along(b, 90.0) && !along(b, 0.0));
         let b0 = self.bending.unwrap_or_else(|| {
@@ -99,7 +99,7 @@ impl Fitter<'_> {
         let n = rigidity.n();
         let law = self.law.clone();
         let mut p = vec![0.0; n];
-        let opts = self.stage_options(level, 1e-14, bends.len());
+        let opts = self.ctx.stage_options(level, 1e-14, bends.len());
         let mut problem = BendProblem {
             rigs: &mut rigs,
             bends,
@@ -146,7 +146,7 @@ impl Fitter<'_> {
             rep.stop
         );
         self.journal.say(&msg);
-        self.time_stage("bending", t0);
+        self.stats.time_stage("bending", t0);
         Ok(())
     }
 

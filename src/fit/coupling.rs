@@ -107,7 +107,7 @@ impl CouplingOutcome {
 fn distinct_angles(f: &Fitter, strips: &[usize]) -> usize {
     let mut a: Vec<i64> = strips
         .iter()
-        .map(|&s| (100.0 * f.prep.strips[s].angle_deg).round() as i64)
+        .map(|&s| (100.0 * f.ctx.prep.strips[s].angle_deg).round() as i64)
         .collect();
     a.sort_unstable();
     a.dedup();
@@ -119,7 +119,7 @@ impl Fitter<'_> {
     /// path to twice its largest elongation (20 points each; module doc).
     fn convex_along(&self, strips: &[usize]) -> bool {
         strips.iter().all(|&s| {
-            let st = &self.prep.strips[s];
+            let st = &self.ctx.prep.strips[s];
             let top = 2.0 * st.nodes.last().copied().unwrap_or(0.0);
             let dl: Vec<f64> = (1..=20).map(|i| top * i as f64 / 20.0).collect();
             let path = super::bootstrap::homogeneous_curve(
@@ -153,7 +153,7 @@ impl Fitter<'_> {
         err: f64,
         range: Option<StrainRange>,
     ) -> Result<(StageMap, f64, Option<StrainRange>), FitError> {
-        let mode = self.opts.shear_coupling;
+        let mode = self.ctx.opts.shear_coupling;
         let angles = distinct_angles(self, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
             self.coupling = CouplingOutcome::Off;
@@ -188,7 +188,7 @@ impl Fitter<'_> {
         self.screened = None;
         let screen = (mode == CouplingMode::Auto).then_some((without.shape, without.rms));
         let run = self.shell_stage(coupled, strips, level, true, super::StageMode::Full, screen);
-        let gain = self.opts.degree_gain;
+        let gain = self.ctx.opts.degree_gain;
         let outcome = match run {
             Ok(Some((shape, r))) => {
                 let with = StageErrors {

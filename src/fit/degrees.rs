@@ -96,11 +96,12 @@ impl Fitter<'_> {
                     super::plausible::implausible(&self.law, map, trial.2.as_ref())
                 };
                 let why = why.or_else(|| {
-                    (self.opts.fixed_degree.is_none() && trial.0 > self.opts.degree_gain * prev.0)
+                    (self.ctx.opts.fixed_degree.is_none()
+                        && trial.0 > self.ctx.opts.degree_gain * prev.0)
                         .then(|| {
                             format!(
                                 "lowers the shape error by less than {:.0} %",
-                                100.0 * (1.0 - self.opts.degree_gain)
+                                100.0 * (1.0 - self.ctx.opts.degree_gain)
                             )
                         })
                 });
@@ -113,13 +114,13 @@ impl Fitter<'_> {
                     break;
                 }
             }
-            let good = trial.0 <= self.opts.degree_good;
+            let good = trial.0 <= self.ctx.opts.degree_good;
             best = Some(trial);
-            if self.opts.fixed_degree.is_none() && good {
+            if self.ctx.opts.fixed_degree.is_none() && good {
                 self.journal.degree(format!(
                     "{}: degree {degree} kept: error below {:.2} %",
                     map.dir.name(),
-                    100.0 * self.opts.degree_good
+                    100.0 * self.ctx.opts.degree_good
                 ));
                 break;
             }
@@ -142,7 +143,7 @@ impl Fitter<'_> {
         prev: &Trial,
     ) -> Result<Option<Trial>, FitError> {
         let from = map.encode(&prev.1);
-        let fixed = self.opts.fixed_degree.is_some();
+        let fixed = self.ctx.opts.fixed_degree.is_some();
         let marks = (
             self.evidence.uncertainty.len(),
             self.evidence.linearised.len(),
@@ -154,7 +155,7 @@ impl Fitter<'_> {
             StageMode::Raise
         };
         let mapped = self.raised_trial(map, strips, level, (&prev.1, &from), beta, mode);
-        let gain = self.opts.degree_gain;
+        let gain = self.ctx.opts.degree_gain;
         let pays = |t: &Trial| t.0 <= gain * prev.0;
         let mapped = match mapped {
             Ok(Some(t)) if pays(&t) => return Ok(Some(t)),

@@ -87,7 +87,7 @@ impl Fitter<'_> {
     /// strips, squared; a quarter of it for the shear).
     fn fallback_maps(&self, map: StageMap) -> Vec<StageMap> {
         use super::map::Direction;
-        let e2 = self.prep.strips.iter().map(|s| {
+        let e2 = self.ctx.prep.strips.iter().map(|s| {
             let e = super::green(s.nodes.last().copied().unwrap_or(0.0), s.length);
             e * e
         });

@@ -22,7 +22,7 @@ pub(super) fn ladder(
     sets: &mut StageSets,
     shear_candidates: &[Vec<f64>],
 ) -> Result<Vec<(usize, usize)>, FitError> {
-    let opts = f.opts;
+    let opts = f.ctx.opts;
     let own = sets.own.clone();
     let strips = &own[..];
     let all: Vec<usize> = strips.iter().flatten().copied().collect();
@@ -63,8 +63,8 @@ pub(super) fn ladder(
                 f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
             }
         }
-        let data = f.data;
-        if f.own_bending {
+        let data = f.ctx.data;
+        if f.ctx.own_bending {
             f.bending_stage(&data.bend, level)?;
         } else if !data.bend.is_empty() && data.known.thickness.is_none() {
             f.thickness_stage(&data.bend, level)?;
@@ -111,7 +111,7 @@ fn refinement_check(
     from: (usize, usize),
     level: (usize, usize),
 ) -> Result<(Option<String>, Option<MeshCheck>), FitError> {
-    let opts = f.opts;
+    let opts = f.ctx.opts;
     let now = f.fitted_forces(all, level)?;
     let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
     let change = super::mean_abs_finite(&d);

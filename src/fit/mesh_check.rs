@@ -355,7 +355,7 @@ impl Fitter<'_> {
     /// ([`order`] for its grading, yarn rule and the law's current yarn-to-shear ratio).
     pub(super) fn mesh_order(&self) -> f64 {
         let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
-        order(self.opts.grading, self.yarns(), ratio)
+        order(self.ctx.opts.grading, self.yarns(), ratio)
     }
 
     /// The tensile stages' latest linearisations at the law's final degrees, then the bend
@@ -390,7 +390,7 @@ impl Fitter<'_> {
 
     /// Drape angles of every bend test on `level` at the current material.
     fn drape_angles(&mut self, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
-        let data = self.data;
+        let data = self.ctx.data;
         let mut rigs = self.bend_rigs(&data.bend, level)?;
         let (law, tau, bending): (_, _, Option<BendingRigidity>) =
             (self.law.clone(), self.thickness, self.bending);
@@ -508,7 +508,13 @@ impl Fitter<'_> {
     ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
         let at_last = self.bend_angles.clone();
         let fine = self.drape_angles(solved_on)?;
-        let targets: Vec<f64> = self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
+        let targets: Vec<f64> = self
+            .ctx
+            .data
+            .bend
+            .iter()
+            .map(|b| b.drape_angle_deg)
+            .collect();
         let mut dr: Vec<f64> = (0..fine.len())
             .map(|k| factor * (fine[k] - at_last[k]) / targets[k])
             .collect();
@@ -517,7 +523,7 @@ impl Fitter<'_> {
             // stages move a·τ; J is ∂r/∂ln τ at fixed a·τ, i.e. 2 ∂r/∂ln B
             let of = |key: &str| changes.iter().find(|c| c.0 == key).map_or(0.0, |c| c.1);
             let (warp, weft) = (of("a11_pa"), of("a22_pa"));
-            for (k, b) in self.data.bend.iter().enumerate().take(dr.len()) {
+            for (k, b) in self.ctx.data.bend.iter().enumerate().take(dr.len()) {
                 let m = if (b.angle_deg - 90.0).abs() < 1e-9 {
                     warp
                 } else if b.angle_deg.abs() < 1e-9 {
@@ -529,6 +535,7 @@ impl Fitter<'_> {
             }
         }
         let labels = self
+            .ctx
             .data
             .bend
             .iter()
@@ -547,25 +554,25 @@ impl Fitter<'_> {
     ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
         let jobs: Vec<(usize, f64)> = strips
             .iter()
-            .map(|&s| (s, self.prep.strips[s].angle_deg))
+            .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
         let (coarse, fine) = self.predict_pair(&jobs, last, finer)?;
         let (mut dr, mut labels) = (Vec::new(), Vec::new());
         for (i, &s) in strips.iter().enumerate() {
-            for c in self.used_curves(&[s]) {
+            for c in self.ctx.used_curves(&[s]) {
                 let (a, b) = (
                     self.curve_forces(c, &coarse[i]),
                     self.curve_forces(c, &fine[i]),
                 );
-                let points = &self.prep.curves[c].points;
+                let points = &self.ctx.prep.curves[c].points;
                 let w = 1.0 / (points.len() as f64).sqrt();
                 for ((m, fa), fb) in points.iter().zip(&a).zip(&b) {
                     // a point excluded on either mesh (a saddle) has no defect to carry
-                    let d = w * self.prep.misfit.change(*fa, *fb, m.1);
+                    let d = w * self.ctx.prep.misfit.change(*fa, *fb, m.1);
                     dr.push(if d.is_finite() { d } else { 0.0 });
                 }
-                let test = self.prep.curves[c].test;
-                labels.push(self.data.tensile[test].curve.display().to_string());
+                let test = self.ctx.prep.curves[c].test;
+                labels.push(self.ctx.data.tensile[test].curve.display().to_string());
             }
         }
         Ok((dr, labels, Vec::new()))

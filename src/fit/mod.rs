@@ -217,6 +217,25 @@ impl Work {
 }
 
 impl FitStats {
+    /// Adds the seconds since `t`, and the Newton iterations since the last timed stage, to
+    /// `stage`.
+    pub(crate) fn time_stage(&mut self, stage: &str, t: Instant) {
+        let s = t.elapsed().as_secs_f64();
+        let st = self;
+        let its = st.newton_iterations - st.counted;
+        st.counted = st.newton_iterations;
+        if let Some(e) = st.stage_seconds.iter_mut().find(|e| e.0 == stage) {
+            e.1 += s;
+        } else {
+            st.stage_seconds.push((stage.to_string(), s));
+        }
+        if let Some(e) = st.stage_iterations.iter_mut().find(|e| e.0 == stage) {
+            e.1 += its;
+        } else {
+            st.stage_iterations.push((stage.to_string(), its));
+        }
+    }
+
     /// Adds a stage's or a run's solver work to the totals.
     pub(crate) fn record(&mut self, w: Work) {
         self.evaluations += w.evaluations;
@@ -305,22 +324,29 @@ struct Evidence {
     pub(super) ladder_check: Option<MeshCheck>,
 }
 
-/// The fitter's working state.
-struct Fitter<'a> {
+/// What every stage reads and none changes: the dataset, the options and what set-up decided.
+struct Context<'a> {
     data: &'a FabricDataset,
     opts: &'a FitOptions,
+    /// the rule that sets a12 from the other stiffnesses (or holds it)
+    a12: A12Rule,
+    /// the prepared curves and strips
+    prep: Prepared,
+    /// the bends fit rigidities of their own (`--bending`) rather than the thickness
+    own_bending: bool,
+}
+
+/// The fitter's working state.
+struct Fitter<'a> {
+    ctx: Context<'a>,
     /// progress lines, notes and the degree log
     journal: journal::Journal<'a>,
     stats: FitStats,
     law: Orthotropic,
     thickness: f64,
-    a12: A12Rule,
-    prep: Prepared,
     /// drape angles of the bend tests at the last thickness or bending stage's result
     bend_angles: Vec<f64>,
-    /// the bends fit rigidities of their own (`--bending`) rather than the thickness
-    own_bending: bool,
-    /// those rigidities, once fitted
+    /// the bends' own rigidities (`--bending`), once fitted
     bending: Option<BendingRigidity>,
     /// what the stages leave for the standard errors and the mesh check
     evidence: Evidence,
@@ -350,8 +376,8 @@ impl Fitter<'_> {
 
     fn material(&self) -> FabricMaterial {
         FabricMaterial {
-            name: self.data.name.clone(),
-            areal_density: self.data.areal_density.unwrap_or(0.1),
+            name: self.ctx.data.name.clone(),
+            areal_density: self.ctx.data.areal_density.unwrap_or(0.1),
             thickness: self.thickness,
             law: self.law.clone(),
             bending: self.bending,
@@ -403,26 +429,9 @@ impl Fitter<'_> {
         }
         p.iter().map(|v| v.to_bits()).collect()
     }
+}
 
-    /// Adds the seconds since `t`, and the Newton iterations since the last timed stage, to
-    /// `stage`.
-    fn time_stage(&mut self, stage: &str, t: Instant) {
-        let s = t.elapsed().as_secs_f64();
-        let st = &mut self.stats;
-        let its = st.newton_iterations - st.counted;
-        st.counted = st.newton_iterations;
-        if let Some(e) = st.stage_seconds.iter_mut().find(|e| e.0 == stage) {
-            e.1 += s;
-        } else {
-            st.stage_seconds.push((stage.to_string(), s));
-        }
-        if let Some(e) = st.stage_iterations.iter_mut().find(|e| e.0 == stage) {
-            e.1 += its;
-        } else {
-            st.stage_iterations.push((stage.to_string(), its));
-        }
-    }
-
+impl Context<'_> {
     /// A stage's minimiser settings on a mesh level, `n` residual groups (curves or bends):
     /// the first level fits; finer levels start from the last level's fit and only polish it
     /// (at most 5 iterations, stopping when one gains under 5 % or the next would move every

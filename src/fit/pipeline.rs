@@ -11,7 +11,7 @@ use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
     bending, coupling, is_determined, joint, ladder, preprocess, refine, stages, uncertainty,
-    validation, FitError, FitOptions, FitResult, FitStats, Fitter,
+    validation, Context, FitError, FitOptions, FitResult, FitStats, Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, Orthotropic};
@@ -54,7 +54,7 @@ pub fn fit(
     if let Some(m) = &mesh_check {
         f.mesh_check_notes(last, m);
     }
-    f.time_stage("report", t0);
+    f.stats.time_stage("report", t0);
     closing_notes(&mut f);
     f.stats.seconds = f.journal.elapsed();
     let material = f.material();
@@ -75,7 +75,7 @@ pub fn fit(
         shapes_fitted,
         yarn_rule,
         shear_coupling: f.coupling,
-        objective: f.prep.misfit,
+        objective: f.ctx.prep.misfit,
         joint: sets.joint.is_some(),
         test_meshes: opts.test_meshes,
     })
@@ -161,8 +161,13 @@ impl<'a> Fitter<'a> {
     ) -> Self {
         let known = &data.known;
         Fitter {
-            data,
-            opts,
+            ctx: Context {
+                data,
+                opts,
+                a12: setup.a12,
+                prep: setup.prep,
+                own_bending: setup.own_bending,
+            },
             journal: Journal::new(progress, start, setup.notes),
             stats: FitStats::default(),
             law: Orthotropic {
@@ -177,10 +182,7 @@ impl<'a> Fitter<'a> {
                 coupling: None,
             },
             thickness: known.thickness.unwrap_or(data.thickness),
-            a12: setup.a12,
-            prep: setup.prep,
             bend_angles: Vec::new(),
-            own_bending: setup.own_bending,
             bending: None,
             evidence: Default::default(),
             bend_refine: 0,
@@ -198,24 +200,24 @@ const DIRECTIONS: [Direction; 3] = [Direction::Warp, Direction::Weft, Direction:
 
 /// The fitted strips of the warp, weft and shear stages.
 fn fitted_strips(f: &Fitter) -> Vec<Vec<usize>> {
-    DIRECTIONS.iter().map(|&d| f.stage_strips(d)).collect()
+    DIRECTIONS.iter().map(|&d| f.ctx.stage_strips(d)).collect()
 }
 
 /// Each stage's variables over the law (see [`StageMap`]).
 fn stage_maps(f: &Fitter, strips: &[Vec<usize>]) -> Vec<StageMap> {
-    let known = &f.data.known;
+    let known = &f.ctx.data.known;
     DIRECTIONS
         .iter()
         .zip(strips)
         .map(|(&dir, s)| StageMap {
             dir,
-            xhat: f.xhat(dir, s),
+            xhat: f.ctx.xhat(dir, s),
             c_known: match dir {
                 Direction::Warp => known.a11.is_some(),
                 Direction::Weft => known.a22.is_some(),
                 Direction::Shear => known.g12.is_some(),
             },
-            a12: f.a12,
+            a12: f.ctx.a12,
             coupling: false,
         })
         .collect()
@@ -223,8 +225,8 @@ fn stage_maps(f: &Fitter, strips: &[Vec<usize>]) -> Vec<StageMap> {
 
 /// Refuses a dataset with nothing to fit the yarn stiffness to.
 fn require_yarn_data(f: &Fitter, strips: &[Vec<usize>]) -> Result<(), FitError> {
-    let known = &f.data.known;
-    let has_fit_tests = f.prep.curves.iter().any(|c| c.role == Role::Fit);
+    let known = &f.ctx.data.known;
+    let has_fit_tests = f.ctx.prep.curves.iter().any(|c| c.role == Role::Fit);
     if strips[0].is_empty() && strips[1].is_empty() && known.a11.is_none() && known.a22.is_none() {
         return Err(FitError::Data(if has_fit_tests {
             "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa: nothing to fit the yarn stiffness to (a bias-only dataset needs the yarn stiffnesses in [known])".into()
@@ -242,11 +244,11 @@ fn shapes_then_bends(
     strips: &[Vec<usize>],
     last: (usize, usize),
 ) -> Result<bool, FitError> {
-    let data = f.data;
+    let data = f.ctx.data;
     let known = &data.known;
     let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
     if shapes_fitted {
-        if f.own_bending {
+        if f.ctx.own_bending {
             f.bending_stage(&data.bend, last)?;
         } else if !data.bend.is_empty() && known.thickness.is_none() {
             f.thickness_stage(&data.bend, last)?;
@@ -263,7 +265,7 @@ fn checked_meshes(
     sets: &StageSets,
     last: (usize, usize),
 ) -> Result<(Vec<uncertainty::ParamError>, Option<MeshCheck>), FitError> {
-    let opts = f.opts;
+    let opts = f.ctx.opts;
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
     let strict = opts.test_meshes == TestMeshes::Strict;
     let t0 = Instant::now();
@@ -275,7 +277,7 @@ fn checked_meshes(
         Some(m) => Some(m),
         None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
     };
-    f.time_stage("mesh check", t0);
+    f.stats.time_stage("mesh check", t0);
     while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
         if !refine::refine_for_check(f, maps, sets, last, m, strict)? {
             break;
@@ -283,7 +285,7 @@ fn checked_meshes(
         let t0 = Instant::now();
         uncertainty = f.final_uncertainty();
         check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
-        f.time_stage("mesh check", t0);
+        f.stats.time_stage("mesh check", t0);
     }
     Ok((uncertainty, check))
 }
@@ -297,5 +299,5 @@ fn closing_notes(f: &mut Fitter) {
             "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip would wrinkle there); the measured points interpolated from them were excluded from the stage's objective (the curves' excluded_points count those of the final predictions)"
         ));
     }
-    f.time_stage("report", t0);
+    f.stats.time_stage("report", t0);
 }

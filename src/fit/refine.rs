@@ -94,7 +94,7 @@ impl Fitter<'_> {
         if self.ladder_meshes {
             return level;
         }
-        let r = self.prep.strips[s].refine;
+        let r = self.ctx.prep.strips[s].refine;
         (level.0 << r, level.1 << r)
     }
 
@@ -105,14 +105,14 @@ impl Fitter<'_> {
 
     /// Every strip's worst curve against its tolerance, solved on its mesh and on half of it.
     fn strip_checks(&mut self, last: (usize, usize)) -> Result<Vec<StripCheck>, FitError> {
-        let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
-            .map(|s| (s, self.prep.strips[s].angle_deg))
+        let jobs: Vec<(usize, f64)> = (0..self.ctx.prep.strips.len())
+            .map(|s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
         let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
         let (fine, rough) = self.predict_pair(&jobs, last, half)?;
         let order = self.mesh_order();
         let mut out = Vec::new();
-        for (s, strip) in self.prep.strips.iter().enumerate() {
+        for (s, strip) in self.ctx.prep.strips.iter().enumerate() {
             let mut worst = StripCheck {
                 estimate: 0.0,
                 tolerance: f64::INFINITY,
@@ -138,7 +138,7 @@ impl Fitter<'_> {
     fn may_refine_bends(&self, last: (usize, usize)) -> bool {
         let l = self.bend_level(last);
         self.bend_refine < MAX_DOUBLINGS
-            && self.data.bend.iter().all(|b| {
+            && self.ctx.data.bend.iter().all(|b| {
                 let (nx, ny) = super::thickness::bend_mesh((2 * l.0, 2 * l.1), b);
                 nx * ny <= MAX_FACES
             })
@@ -146,7 +146,7 @@ impl Fitter<'_> {
 
     /// Whether strip `s` may be doubled once more on top of `last`.
     fn may_refine(&self, s: usize, last: (usize, usize)) -> bool {
-        let strip = &self.prep.strips[s];
+        let strip = &self.ctx.prep.strips[s];
         if strip.refine >= MAX_DOUBLINGS {
             return false;
         }
@@ -170,7 +170,7 @@ pub(super) fn refine_tests(
         f.journal
             .say("per-test meshes: every strip's mesh-error estimate");
         let checks = f.strip_checks(last)?;
-        f.time_stage("per-test meshes", t0);
+        f.stats.time_stage("per-test meshes", t0);
         let todo: Vec<(usize, String)> = (0..checks.len())
             .filter(|&s| checks[s].estimate > checks[s].tolerance && f.may_refine(s, last))
             .map(|s| {
@@ -231,8 +231,8 @@ pub(super) fn refine_for_check(
     // `strict`: a fitted curve moving by 0.3 % after the refit has its strip refined, unless
     // a stage's rule above already refines it
     if curves && check.curve_change >= MESH_FLOOR {
-        let strip = f.prep.curves.iter().find_map(|c| {
-            let label = f.data.tensile[c.test].curve.display().to_string();
+        let strip = f.ctx.prep.curves.iter().find_map(|c| {
+            let label = f.ctx.data.tensile[c.test].curve.display().to_string();
             (label == check.curve).then_some(c.strip)
         });
         if let Some(s) = strip.filter(|&s| f.may_refine(s, last) && todo.iter().all(|t| t.0 != s)) {
@@ -288,7 +288,7 @@ fn double_and_refit(
     todo: &[(usize, String)],
 ) -> Result<(), FitError> {
     for (s, why) in todo {
-        let strip = &f.prep.strips[*s];
+        let strip = &f.ctx.prep.strips[*s];
         let l = f.strip_level(*s, last);
         let from = strip_mesh(l, strip.width, strip.length);
         let to = strip_mesh((2 * l.0, 2 * l.1), strip.width, strip.length);
@@ -298,7 +298,7 @@ fn double_and_refit(
         );
         f.journal.say(&note);
         f.journal.note(note);
-        f.prep.strips[*s].refine += 1;
+        f.ctx.prep.strips[*s].refine += 1;
     }
     let stages = &sets.own;
     let first = (0..stages.len())
@@ -317,8 +317,8 @@ fn double_and_refit(
         // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
         f.joint_stiffness(maps[k], k, sets, last)?;
     }
-    let data = f.data;
-    if f.own_bending {
+    let data = f.ctx.data;
+    if f.ctx.own_bending {
         f.bending_stage(&data.bend, last)?;
     } else if !data.bend.is_empty() && data.known.thickness.is_none() {
         f.thickness_stage(&data.bend, last)?;

@@ -57,7 +57,7 @@ impl Fitter<'_> {
     /// The rule of a strip cut at `angle`: the fit's, but `auto` keeps the full rule where
     /// the yarns run along the cage ([`YarnRule::for_strip`]).
     pub(super) fn strip_yarns(&self, angle: f64) -> YarnRule {
-        if self.opts.yarn_rule.for_strip(angle) == YarnRule::Full {
+        if self.ctx.opts.yarn_rule.for_strip(angle) == YarnRule::Full {
             YarnRule::Full
         } else {
             self.yarns()
@@ -68,11 +68,11 @@ impl Fitter<'_> {
     /// every strip of the fit shares one discretisation, and says so.
     pub(super) fn decide_yarns(&mut self) {
         let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
-        let rule = self.opts.yarn_rule.resolve(ratio);
+        let rule = self.ctx.opts.yarn_rule.resolve(ratio);
         self.lab.yarns = Some(rule);
         self.lab.yarn_ratio = ratio;
         if rule == YarnRule::Centre {
-            let why = match self.opts.yarn_rule {
+            let why = match self.ctx.opts.yarn_rule {
                 YarnRule::Auto => format!(
                     " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, above {:.0})",
                     ratio.unwrap_or(f64::NAN),
@@ -82,7 +82,7 @@ impl Fitter<'_> {
             };
             self.journal.note(format!(
                 "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
-                super::mesh_check::order(self.opts.grading, rule, ratio)
+                super::mesh_check::order(self.ctx.opts.grading, rule, ratio)
             ));
         }
     }
@@ -96,19 +96,19 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<(RigKey, StripRig), FitError> {
         let level = self.strip_level(s, level);
-        let strip = &self.prep.strips[s];
+        let strip = &self.ctx.prep.strips[s];
         let key = self.rig_key(s, angle, level);
         if let Some(rig) = self.lab.rigs.remove(&key) {
             return Ok((key, rig));
         }
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
-        t.grading = self.opts.grading;
+        t.grading = self.ctx.opts.grading;
         t.yarn_rule = self.strip_yarns(angle);
         t.yarn_ratio = self.lab.yarn_ratio;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
-        t.solver.strategy = self.opts.strategy;
+        t.solver.strategy = self.ctx.opts.strategy;
         let mut rig = t
             .rig(&self.material(), &strip.nodes)
             .map_err(|source| FitError::Scene {
@@ -133,7 +133,7 @@ impl Fitter<'_> {
 
     /// The cache key of strip `s` cut at `angle` on the mesh of `level` (the strip's own).
     pub(super) fn rig_key(&self, s: usize, angle: f64, level: (usize, usize)) -> RigKey {
-        let strip = &self.prep.strips[s];
+        let strip = &self.ctx.prep.strips[s];
         (
             [
                 strip.width.to_bits(),
@@ -300,7 +300,7 @@ impl Fitter<'_> {
     /// Mean |relative error| of curve `c`'s measured points against its `model` forces (NaN
     /// model forces, saddles, left out).
     pub(super) fn curve_fit_error(&self, c: usize, model: &[f64]) -> f64 {
-        let r: Vec<f64> = self.prep.curves[c]
+        let r: Vec<f64> = self.ctx.prep.curves[c]
             .points
             .iter()
             .zip(model)
@@ -314,8 +314,8 @@ impl Fitter<'_> {
     /// forces: NaN where the interpolation uses a node with no force (a saddle, see
     /// [`node_force`]).
     pub(super) fn curve_forces(&self, c: usize, node_forces: &[f64]) -> Vec<f64> {
-        let curve = &self.prep.curves[c];
-        let nodes = &self.prep.strips[curve.strip].nodes;
+        let curve = &self.ctx.prep.curves[c];
+        let nodes = &self.ctx.prep.strips[curve.strip].nodes;
         curve
             .points
             .iter()

@@ -83,7 +83,7 @@ impl Fitter<'_> {
     /// there are none. The caller runs it only where no off-axis strip fitted the shear.
     pub(super) fn shapes_stage(&mut self) -> Result<bool, FitError> {
         let t0 = Instant::now();
-        let targets = shearing_targets(self.data)?;
+        let targets = shearing_targets(self.ctx.data)?;
         if targets.is_empty() {
             return Ok(false);
         }
@@ -126,7 +126,7 @@ impl Fitter<'_> {
                 evaluations: scan.evaluations,
                 ..Work::default()
             });
-            self.time_stage("shapes", t0);
+            self.stats.time_stage("shapes", t0);
             return Ok(false);
         };
         self.law.g12 = g12;
@@ -152,7 +152,7 @@ impl Fitter<'_> {
             "G12 = {g12:.4e} Pa fitted to {} captured shape(s)' {basis} (no off-axis strip determines the shear; the shear law stays linear)",
             targets.len()
         ));
-        self.time_stage("shapes", t0);
+        self.stats.time_stage("shapes", t0);
         Ok(true)
     }
 }

@@ -44,7 +44,7 @@ impl Fitter<'_> {
         curves: &[usize],
         starts: Vec<Vec<f64>>,
     ) -> Option<(Vec<f64>, f64, f64)> {
-        let (prep, law, tau) = (&self.prep, &self.law, self.thickness);
+        let (prep, law, tau) = (&self.ctx.prep, &self.law, self.thickness);
         let fits: Vec<_> = starts
             .into_par_iter()
             .map(|p0| homogeneous_fit(prep, law, tau, map, curves, p0, None))
@@ -65,8 +65,8 @@ impl Fitter<'_> {
     fn bootstrap(&mut self, map: StageMap, curves: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
         // secant stiffness of the first curve as the start of degree 1
         let c0 = {
-            let curve = &self.prep.curves[curves[0]];
-            let s = &self.prep.strips[curve.strip];
+            let curve = &self.ctx.prep.curves[curves[0]];
+            let s = &self.ctx.prep.strips[curve.strip];
             let (dl, f) = *curve.points.last().expect("a curve with points");
             let lambda = 1.0 + dl / s.length;
             let secant = f / (s.width * self.thickness * lambda * super::green(dl, s.length));
@@ -95,14 +95,14 @@ impl Fitter<'_> {
             100.0 * chosen.1,
             100.0 * chosen.2
         ));
-        let fixed = self.opts.fixed_degree;
-        for degree in 2..=fixed.unwrap_or(self.opts.max_degree) {
-            if fixed.is_none() && chosen.2 <= self.opts.degree_good {
+        let fixed = self.ctx.opts.fixed_degree;
+        for degree in 2..=fixed.unwrap_or(self.ctx.opts.max_degree) {
+            if fixed.is_none() && chosen.2 <= self.ctx.opts.degree_good {
                 self.journal.degree(format!(
                     "{}: degree {} kept: error below {:.2} %",
                     map.dir.name(),
                     degree - 1,
-                    100.0 * self.opts.degree_good
+                    100.0 * self.ctx.opts.degree_good
                 ));
                 break;
             }
@@ -141,7 +141,7 @@ impl Fitter<'_> {
                 100.0 * candidate.2
             ));
             all.push(candidate.0.clone());
-            let gains = fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2;
+            let gains = fixed.is_some() || candidate.2 <= self.ctx.opts.degree_gain * chosen.2;
             if gains && fixed.is_none() && self.yarn_law_falls(map, &candidate.0) {
                 self.log_degree(format!(
                     "{}: degree {} kept: degree {degree} has a negative weight on its stiffest term, so its stress falls just past the tested strain (homogeneous strip)",
@@ -157,7 +157,7 @@ impl Fitter<'_> {
                     "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
                     map.dir.name(),
                     degree - 1,
-                    100.0 * (1.0 - self.opts.degree_gain)
+                    100.0 * (1.0 - self.ctx.opts.degree_gain)
                 ));
                 break;
             }
@@ -205,16 +205,16 @@ impl Fitter<'_> {
         let t0 = Instant::now();
         let mut sp = self.stage_problem(map, strips, level)?;
         let mut p = self.unsaturated_start(map);
-        let first_level = level == self.opts.ladder[0];
-        let opts = self.stage_options(level, 1e-12, sp.ncurves);
+        let first_level = level == self.ctx.opts.ladder[0];
+        let opts = self.ctx.stage_options(level, 1e-12, sp.ncurves);
         if !self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)? {
-            self.time_stage(map.dir.name(), t0);
+            self.stats.time_stage(map.dir.name(), t0);
             return Ok(None);
         }
         let stiffness_first = (first_level || stiffness_only) && !map.c_known;
         let (rep, dropped) = fit_stage(
             &mut sp,
-            &self.prep,
+            &self.ctx.prep,
             &mut p,
             &opts,
             stiffness_first,
@@ -244,7 +244,7 @@ impl Fitter<'_> {
         for (key, rig) in sp.rigs {
             self.keep_rig(key, rig);
         }
-        self.time_stage(map.dir.name(), t0);
+        self.stats.time_stage(map.dir.name(), t0);
         self.stage_rms = err;
         Ok(Some((shape, range)))
     }
@@ -259,18 +259,18 @@ impl Fitter<'_> {
     ) -> Result<StageProblem<'s>, FitError> {
         let mut rigs = Vec::new();
         for &s in strips {
-            let angle = self.prep.strips[s].angle_deg;
+            let angle = self.ctx.prep.strips[s].angle_deg;
             let (key, mut rig) = self.strip_rig(s, angle, level)?;
             rig.set_wanted(Some(map.wanted(&self.law)));
             rig.set_bending(self.bending);
             rigs.push((key, rig));
         }
-        let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
+        let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.ctx.used_curves(&[s])).collect();
         let ncurves: usize = curves.iter().map(Vec::len).sum();
         let lens: Vec<usize> = curves
             .iter()
             .flatten()
-            .map(|&c| self.prep.curves[c].points.len())
+            .map(|&c| self.ctx.prep.curves[c].points.len())
             .collect();
         Ok(StageProblem {
             map,
@@ -301,7 +301,7 @@ impl Fitter<'_> {
     ) -> Result<bool, FitError> {
         let (map, level) = (sp.map, sp.level);
         let fail = stage_failed(map, level);
-        let first_level = level == self.opts.ladder[0];
+        let first_level = level == self.ctx.opts.ladder[0];
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         // the stiffness alone needs no start from the homogeneous strip (it is one variable),
         // nor does a finer level's stage whose own Gauss–Newton step, from the Jacobian just
@@ -318,7 +318,7 @@ impl Fitter<'_> {
             }
         };
         let predict = !first_level && !stiffness_only;
-        let (m, rounds) = stage_start(sp, &self.prep, p, predict, rounds).map_err(fail)?;
+        let (m, rounds) = stage_start(sp, &self.ctx.prep, p, predict, rounds).map_err(fail)?;
         self.stats
             .record(Work::bootstrap(m.homogeneous_evaluations));
         let note = mapped_note(map, p, level, &m);
@@ -326,8 +326,8 @@ impl Fitter<'_> {
         // risen or the rms error already fell by the degree gain there
         let screened_out = match screen {
             Some(s) => {
-                let gain = self.opts.degree_gain;
-                let out = screen_trial(sp, &self.prep, p, m.after, s, gain).map_err(fail)?;
+                let gain = self.ctx.opts.degree_gain;
+                let out = screen_trial(sp, &self.ctx.prep, p, m.after, s, gain).map_err(fail)?;
                 if out.is_some() {
                     self.screened = out;
                 }
@@ -374,7 +374,10 @@ impl Fitter<'_> {
             .rev()
             .find(|(q, _, _)| *q == p)
             .map_or(err, |(_, r, _)| {
-                super::shape_error(lens, &super::surrogate::unweight(r, lens, self.prep.misfit))
+                super::shape_error(
+                    lens,
+                    &super::surrogate::unweight(r, lens, self.ctx.prep.misfit),
+                )
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
@@ -384,7 +387,7 @@ impl Fitter<'_> {
                 .push((map.dir, p.to_vec(), errors));
             let tau = sp.tau;
             let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
-                super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, p, sp.strips)
+                super::uncertainty::offaxis_rows(&self.ctx.prep, &self.law, tau, &map, p, sp.strips)
             });
             self.evidence
                 .linearised
@@ -426,7 +429,7 @@ impl Fitter<'_> {
         strips
             .iter()
             .map(|&s| {
-                let strip = &self.prep.strips[s];
+                let strip = &self.ctx.prep.strips[s];
                 if strip.refine == 0 {
                     format!("{}°", strip.angle_deg)
                 } else {
@@ -475,12 +478,12 @@ impl Fitter<'_> {
     ) -> Result<Vec<f64>, FitError> {
         let jobs: Vec<(usize, f64)> = strips
             .iter()
-            .map(|&s| (s, self.prep.strips[s].angle_deg))
+            .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
         let nodes = self.predict_many(&jobs, level)?;
         let mut out = Vec::new();
         for (&s, node) in strips.iter().zip(&nodes) {
-            for c in self.used_curves(&[s]) {
+            for c in self.ctx.used_curves(&[s]) {
                 out.extend(self.curve_forces(c, node));
             }
         }
@@ -499,7 +502,7 @@ pub(super) fn bootstrap_all(
     f.journal.say("bootstrap on the homogeneous-strain strip");
     let mut shear_candidates = Vec::new();
     for k in 0..2 {
-        let curves = f.used_curves(&strips[k]);
+        let curves = f.ctx.used_curves(&strips[k]);
         if !curves.is_empty() {
             let (q, _) = f.bootstrap(maps[k], &curves);
             let mut law = f.law.clone();
@@ -507,7 +510,7 @@ pub(super) fn bootstrap_all(
             f.law = law;
         }
     }
-    let known = &f.data.known;
+    let known = &f.ctx.data.known;
     match (strips[0].is_empty(), strips[1].is_empty()) {
         (true, false) if known.a11.is_none() => {
             f.law.a11 = f.law.a22;
@@ -533,28 +536,28 @@ pub(super) fn bootstrap_all(
         let note = super::plausible::cut_before_fall(&mut f.law, *map);
         f.law_note(note);
     }
-    f.a12.apply(&mut f.law);
+    f.ctx.a12.apply(&mut f.law);
     // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
     // the two agree best) it misjudges the strip badly (a shape error of 12–18 % over 22.5°,
     // 45° and 67.5° on the bundled fabrics, with starts the shell could not solve), so the
     // shear is bootstrapped on the strips closest to 45° only; the shell stages use them all
     let nearest = strips[2]
         .iter()
-        .map(|&s| (f.prep.strips[s].angle_deg - 45.0).abs())
+        .map(|&s| (f.ctx.prep.strips[s].angle_deg - 45.0).abs())
         .fold(f64::INFINITY, f64::min);
     let bias: Vec<usize> = strips[2]
         .iter()
         .copied()
-        .filter(|&s| (f.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
+        .filter(|&s| (f.ctx.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
         .collect();
-    let shear = f.used_curves(&bias);
+    let shear = f.ctx.used_curves(&bias);
     if !shear.is_empty() {
         let (q, all) = f.bootstrap(maps[2], &shear);
         let mut law = f.law.clone();
         maps[2].decode(&q, &mut law);
         f.law = law;
         shear_candidates = all;
-    } else if f.data.known.g12.is_none() {
+    } else if f.ctx.data.known.g12.is_none() {
         f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
         let g12 = f.law.g12;
         f.journal.note(format!(
@@ -562,7 +565,7 @@ pub(super) fn bootstrap_all(
             super::shapes::SHEAR_ASSUMED
         ));
     }
-    f.time_stage("bootstrap", t0);
+    f.stats.time_stage("bootstrap", t0);
     shear_candidates
 }
 

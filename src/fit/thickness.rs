@@ -62,10 +62,10 @@ impl Fitter<'_> {
                 Some(rig) => rig,
                 None => {
                     let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-                    bend.yarn_rule = self.opts.yarn_rule; // a bend reads `auto` as the full rule
+                    bend.yarn_rule = self.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
                     bend.mesh = mesh;
                     bend.solver.rtol = super::FIT_RTOL;
-                    bend.solver.strategy = self.opts.strategy;
+                    bend.solver.strategy = self.ctx.opts.strategy;
                     BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
                         stage: format!("setting up the {}° cantilever", b.angle_deg),
                         source,
@@ -118,7 +118,7 @@ impl Fitter<'_> {
             (law, tau)
         };
         let mut p = vec![0.0];
-        let opts = self.stage_options(level, 1e-14, bends.len());
+        let opts = self.ctx.stage_options(level, 1e-14, bends.len());
         let (mut evals, mut newton) = (0, 0);
         let mut seen = super::uncertainty::Seen::new();
         let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
@@ -188,8 +188,8 @@ impl Fitter<'_> {
         self.keep_bend_rigs(bends, level, rigs);
         self.law = law;
         // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
-        if let super::map::A12Rule::Fixed(_) = self.a12 {
-            self.a12.apply(&mut self.law);
+        if let super::map::A12Rule::Fixed(_) = self.ctx.a12 {
+            self.ctx.a12.apply(&mut self.law);
         }
         self.thickness = tau;
         let msg = format!(
@@ -202,7 +202,7 @@ impl Fitter<'_> {
             rep.stop
         );
         self.journal.say(&msg);
-        self.time_stage("thickness", t0);
+        self.stats.time_stage("thickness", t0);
         Ok(())
     }
 }

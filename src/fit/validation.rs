@@ -27,7 +27,7 @@ impl Fitter<'_> {
         angle: f64,
         level: (usize, usize),
     ) -> Result<(f64, Vec<f64>), FitError> {
-        let s = self.prep.curves[c].strip;
+        let s = self.ctx.prep.curves[c].strip;
         let node = self.predict(s, angle, level)?;
         let model = self.curve_forces(c, &node);
         Ok((self.curve_fit_error(c, &model), model))
@@ -37,7 +37,7 @@ impl Fitter<'_> {
     /// its squared relative error on a grid of at most 1° (strips shared by every repeat),
     /// refined by the parabola through the best grid point and its neighbours.
     fn misalignment(&mut self, c: usize, level: (usize, usize)) -> Option<f64> {
-        let m = self.opts.max_misalign_deg;
+        let m = self.ctx.opts.max_misalign_deg;
         if m <= 0.0 {
             return None;
         }
@@ -45,15 +45,15 @@ impl Fitter<'_> {
         let grid: Vec<f64> = (0..=n)
             .map(|k| -m + 2.0 * m * k as f64 / n as f64)
             .collect();
-        let angle = self.prep.curves[c].angle_deg;
-        let s = self.prep.curves[c].strip;
+        let angle = self.ctx.prep.curves[c].angle_deg;
+        let s = self.ctx.prep.curves[c].strip;
         // solve the grid's strips side by side; a failed one costs +∞ below
         let jobs: Vec<(usize, f64)> = grid.iter().map(|d| (s, angle + d)).collect();
         let _ = self.predict_many(&jobs, level);
         let costs: Vec<f64> = grid
             .iter()
             .map(|&d| match self.curve_error(c, angle + d, level) {
-                Ok((_, model)) => self.prep.curves[c]
+                Ok((_, model)) => self.ctx.prep.curves[c]
                     .points
                     .iter()
                     .zip(&model)
@@ -81,10 +81,10 @@ impl Fitter<'_> {
     /// where every strip is solved at its measured points (nothing is interpolated).
     fn interpolation_error(&mut self) -> Result<Option<(f64, f64)>, FitError> {
         use rayon::prelude::*;
-        let level = self.opts.ladder[0];
-        let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
-            .filter(|&s| !self.prep.strips[s].at_points)
-            .map(|s| (s, self.prep.strips[s].angle_deg))
+        let level = self.ctx.opts.ladder[0];
+        let jobs: Vec<(usize, f64)> = (0..self.ctx.prep.strips.len())
+            .filter(|&s| !self.ctx.prep.strips[s].at_points)
+            .map(|s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
         if jobs.is_empty() {
             return Ok(None);
@@ -93,7 +93,7 @@ impl Fitter<'_> {
         let material = self.material();
         let mut checks = Vec::new();
         for &(s, _) in &jobs {
-            let strip = &self.prep.strips[s];
+            let strip = &self.ctx.prep.strips[s];
             let mut mids = Vec::new();
             let mut prev = 0.0;
             for &e in &strip.nodes {
@@ -109,11 +109,11 @@ impl Fitter<'_> {
             let key = self.rig_key(s, strip.angle_deg, own);
             let node_rig = self.lab.rigs.get(&key);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
-            t.grading = self.opts.grading;
+            t.grading = self.ctx.opts.grading;
             t.yarn_rule = self.strip_yarns(strip.angle_deg);
             t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio, |r| r.yarn_ratio());
             t.solver.rtol = super::FIT_RTOL;
-            t.solver.strategy = self.opts.strategy;
+            t.solver.strategy = self.ctx.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
@@ -130,7 +130,7 @@ impl Fitter<'_> {
             .collect();
         let mut worst = (0.0f64, 0.0);
         for (j, ((s, mids, _), run)) in checks.iter().zip(solved).enumerate() {
-            let strip = &self.prep.strips[*s];
+            let strip = &self.ctx.prep.strips[*s];
             let pts = run.map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
@@ -158,8 +158,8 @@ impl Fitter<'_> {
 pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestOutcome>, FitError> {
     let mut tests = Vec::new();
     f.journal.say("report: every curve at its nominal angle");
-    let jobs: Vec<(usize, f64)> = (0..f.prep.strips.len())
-        .map(|s| (s, f.prep.strips[s].angle_deg))
+    let jobs: Vec<(usize, f64)> = (0..f.ctx.prep.strips.len())
+        .map(|s| (s, f.ctx.prep.strips[s].angle_deg))
         .collect();
     f.predict_many(&jobs, last)?;
     // each strip's discretisation error: the last level against one with half the faces
@@ -172,7 +172,7 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
         half.0, half.1
     ));
     let coarse = f.predict_many(&jobs, half).ok();
-    for c in 0..f.prep.curves.len() {
+    for c in 0..f.ctx.prep.curves.len() {
         tests.push(curve_outcome(f, c, last, coarse.as_deref(), order)?);
     }
     interpolation_note(f);
@@ -189,12 +189,12 @@ fn curve_outcome(
     coarse: Option<&[Vec<f64>]>,
     order: f64,
 ) -> Result<TestOutcome, FitError> {
-    let curve = f.prep.curves[c].clone();
-    let data = f.data;
+    let curve = f.ctx.prep.curves[c].clone();
+    let data = f.ctx.data;
     let t = &data.tensile[curve.test];
     let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
     let (scale, scaled) = repeat_scale(f, &curve, &t.curve.display().to_string(), &model);
-    let strip = &f.prep.strips[curve.strip];
+    let strip = &f.ctx.prep.strips[curve.strip];
     let mesh = super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
     let mesh_error = coarse.map(|nodes| {
         let rough = f.curve_forces(c, &nodes[curve.strip]);
@@ -215,7 +215,8 @@ fn curve_outcome(
             ));
         }
     }
-    let (misalign, aligned) = if curve.role == Role::Validation && f.opts.max_misalign_deg > 0.0 {
+    let (misalign, aligned) = if curve.role == Role::Validation && f.ctx.opts.max_misalign_deg > 0.0
+    {
         misalignment_check(f, c, &curve, &t.curve.display().to_string(), last)?
     } else {
         (None, None)
@@ -287,13 +288,13 @@ fn misalignment_check(
         .say(&format!("report: misalignment diagnostic of {name}"));
     // a diagnostic: on the first level's strips, whatever this one's own mesh
     f.ladder_meshes = true;
-    let found = f.misalignment(c, f.opts.ladder[0]);
+    let found = f.misalignment(c, f.ctx.opts.ladder[0]);
     f.ladder_meshes = false;
     if let Some(d) = found {
         let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
         misalign = Some(d);
         aligned = Some(e);
-        let m = f.opts.max_misalign_deg;
+        let m = f.ctx.opts.max_misalign_deg;
         if (d.abs() - m).abs() < 1e-9 {
             f.journal.note(format!(
                 "warning: validation {}° ({name}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
@@ -306,8 +307,8 @@ fn misalignment_check(
 
 /// The note on the model curves' interpolation between nodes (checked halfway between them).
 fn interpolation_note(f: &mut Fitter) {
-    let exact = f.prep.strips.iter().filter(|s| s.at_points).count();
-    if exact < f.prep.strips.len() {
+    let exact = f.ctx.prep.strips.iter().filter(|s| s.at_points).count();
+    if exact < f.ctx.prep.strips.len() {
         f.journal
             .say("report: interpolation check (solves halfway between the nodes)");
     }
@@ -316,18 +317,18 @@ fn interpolation_note(f: &mut Fitter) {
     } else {
         format!(
             "; {exact} of {} strips solved at their measured elongations (no more of them than nodes), not interpolated",
-            f.prep.strips.len()
+            f.ctx.prep.strips.len()
         )
     };
     match f.interpolation_error() {
         Ok(Some(worst)) => f.journal.note(format!(
         "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}{at_points}",
-        f.opts.nodes,
+        f.ctx.opts.nodes,
         100.0 * worst.0,
         worst.1,
-        f.opts.ladder[0].0,
-        f.opts.ladder[0].1,
-        if f.prep.strips.iter().any(|s| s.refine > 0) && !f.ladder_meshes {
+        f.ctx.opts.ladder[0].0,
+        f.ctx.opts.ladder[0].1,
+        if f.ctx.prep.strips.iter().any(|s| s.refine > 0) && !f.ladder_meshes {
             ", strips refined on their own meshes there"
         } else {
             ""
@@ -348,13 +349,13 @@ fn bend_outcomes(
     last: (usize, usize),
     tests: &mut Vec<TestOutcome>,
 ) -> Result<(), FitError> {
-    let data = f.data;
+    let data = f.ctx.data;
     if f.bend_angles.len() != data.bend.len() {
         // thickness known: the bends are predicted, not fitted
         f.bend_angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.yarn_rule = f.opts.yarn_rule; // a bend reads `auto` as the full rule
+            bend.yarn_rule = f.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
             bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
             let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
                 stage: format!("predicting the {}° cantilever", b.angle_deg),
@@ -363,7 +364,7 @@ fn bend_outcomes(
             f.bend_angles.push(r.drape_angle_deg);
         }
     }
-    let fitted = f.own_bending || data.known.thickness.is_none();
+    let fitted = f.ctx.own_bending || data.known.thickness.is_none();
     for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
         tests.push(TestOutcome {
             kind: "bend",
@@ -405,7 +406,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             "assumed"
         }
     };
-    let k = &f.data.known;
+    let k = &f.ctx.data.known;
     out.push(format!(
         "E1·τ = {:.5e} N/m (warp, small strain): {}",
         e1 * tau,
@@ -421,7 +422,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
         (1.0 / g - 2.0 * nu12 / e1) / tau,
         source(!strips[2].is_empty(), k.g12.is_some())
     ));
-    out.push(match f.a12 {
+    out.push(match f.ctx.a12 {
         A12Rule::HalfMin => format!(
             "a12 = {:.4e} Pa (ν12 = {nu12:.3}): assumed, ½·min(a11, a22) (the paper's default); strips do not determine it: another a12 with G12 changed to keep 1/G − 2ν12/E1 fits them alike at small strain, so G12 = {:.4e} Pa is tied to this choice (give [known] poisson_12 or a12_pa to pin it)",
             l.a12, l.g12
@@ -434,6 +435,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
     });
     if let Some(b) = f.bending {
         let off_axis = f
+            .ctx
             .data
             .bend
             .iter()
@@ -477,7 +479,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
             tau * 1e3
         )
-    } else if f.data.bend.is_empty() {
+    } else if f.ctx.data.bend.is_empty() {
         format!(
             "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
             tau * 1e3

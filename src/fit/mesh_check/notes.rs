@@ -32,7 +32,7 @@ impl Fitter<'_> {
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
-        let own = if self.prep.strips.iter().any(|s| s.refine > 0) {
+        let own = if self.ctx.prep.strips.iter().any(|s| s.refine > 0) {
             " (and every strip refined on its own mesh once more)"
         } else {
             ""
@@ -52,7 +52,7 @@ impl Fitter<'_> {
         // a curve alone failing, where `own` meshes left it: the strict rule refines its strip
         let curve_only = m.change < MESH_PARAM_TOL
             && m.angle_change_deg.is_none_or(|a| a < MESH_ANGLE_TOL_DEG)
-            && self.opts.test_meshes == crate::fit::TestMeshes::Own;
+            && self.ctx.opts.test_meshes == crate::fit::TestMeshes::Own;
         let line = if bad && curve_only {
             format!("{line}: the fit is not mesh-independent; --test-meshes strict refines the strip of that curve (or add the finer level, --mesh-ladder)")
         } else if bad {
