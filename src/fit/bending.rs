@@ -76,9 +76,9 @@ impl Fitter<'_> {
     ) -> Result<(), FitError> {
         let t0 = Instant::now();
         let density = self.ctx.data.areal_density.unwrap_or(0.1);
-        let ratio = bias_ratio(&self.law);
+        let ratio = bias_ratio(&self.fitted.law);
         let off_axis = bends.iter().any(|b| !along(b, 90.0) && !along(b, 0.0));
-        let b0 = self.bending.unwrap_or_else(|| {
+        let b0 = self.fitted.bending.unwrap_or_else(|| {
             let (w, f) = (
                 start_rigidity(bends, 90.0, density),
                 start_rigidity(bends, 0.0, density),
@@ -97,7 +97,7 @@ impl Fitter<'_> {
             ratio,
         };
         let n = rigidity.n();
-        let law = self.law.clone();
+        let law = self.fitted.law.clone();
         let mut p = vec![0.0; n];
         let opts = self.ctx.stage_options(level, 1e-14, bends.len());
         let mut problem = BendProblem {
@@ -105,7 +105,7 @@ impl Fitter<'_> {
             bends,
             nlaw: law.params().len(),
             law,
-            tau: self.thickness,
+            tau: self.fitted.thickness,
             rigidity,
             evals: 0,
             newton: 0,
@@ -132,7 +132,7 @@ impl Fitter<'_> {
             self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.keep_bend_rigs(bends, level, rigs);
-        self.bending = Some(b);
+        self.fitted.bending = Some(b);
         let msg = format!(
             "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
             self.bend_level(level).0,

@@ -123,18 +123,19 @@ impl Fitter<'_> {
             let top = 2.0 * st.nodes.last().copied().unwrap_or(0.0);
             let dl: Vec<f64> = (1..=20).map(|i| top * i as f64 / 20.0).collect();
             let path = super::bootstrap::homogeneous_curve(
-                &self.law,
+                &self.fitted.law,
                 st.angle_deg,
                 st.width,
                 st.length,
-                self.thickness,
+                self.fitted.thickness,
                 &dl,
                 false,
             );
             path.is_ok_and(|pts| {
                 pts.iter().all(|p| {
                     let e = nalgebra::Vector3::from(p.strain);
-                    self.law
+                    self.fitted
+                        .law
                         .response(&e)
                         .is_ok_and(|r| r.tangent.cholesky().is_some())
                 })
@@ -156,11 +157,11 @@ impl Fitter<'_> {
         let mode = self.ctx.opts.shear_coupling;
         let angles = distinct_angles(self, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
-            self.coupling = CouplingOutcome::Off;
+            self.fitted.coupling = CouplingOutcome::Off;
             return Ok((map, err, range));
         }
         if mode == CouplingMode::Auto && angles < 2 {
-            self.coupling = CouplingOutcome::NotTried;
+            self.fitted.coupling = CouplingOutcome::NotTried;
             self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
@@ -171,11 +172,11 @@ impl Fitter<'_> {
             ..map
         };
         let saved = (
-            self.law.clone(),
+            self.fitted.law.clone(),
             self.evidence.uncertainty.len(),
             self.evidence.linearised.len(),
         );
-        self.law.coupling = Some(ShearCoupling {
+        self.fitted.law.coupling = Some(ShearCoupling {
             warp: 0.0,
             weft: 0.0,
         });
@@ -235,12 +236,12 @@ impl Fitter<'_> {
         };
         match outcome {
             Ok((with, r)) => {
-                let c = self.law.coupling.expect("the coupled stage sets κ");
+                let c = self.fitted.law.coupling.expect("the coupled stage sets κ");
                 self.log_degree(format!(
                     "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
                     level.0, level.1, c.warp, c.weft
                 ));
-                self.coupling = CouplingOutcome::Kept { without, with };
+                self.fitted.coupling = CouplingOutcome::Kept { without, with };
                 Ok((coupled, with.shape, r))
             }
             Err(rejected) => {
@@ -250,10 +251,10 @@ impl Fitter<'_> {
                         level.0, level.1
                     ));
                 }
-                self.law = saved.0;
+                self.fitted.law = saved.0;
                 self.evidence.uncertainty.truncate(saved.1);
                 self.evidence.linearised.truncate(saved.2);
-                self.coupling = rejected;
+                self.fitted.coupling = rejected;
                 Ok((map, err, range))
             }
         }

@@ -49,17 +49,17 @@ impl Fitter<'_> {
         level: (usize, usize),
         candidates: &[Vec<f64>],
     ) -> Result<(f64, Option<StrainRange>), FitError> {
-        let base = self.law.clone();
+        let base = self.fitted.law.clone();
         let mut best: Option<Trial> = None;
         for (i, cand) in candidates.iter().enumerate() {
             let degree = i + 1;
             let trial = match &best {
                 None => {
-                    self.law = base.clone();
-                    map.decode(cand, &mut self.law);
+                    self.fitted.law = base.clone();
+                    map.decode(cand, &mut self.fitted.law);
                     let run = self.shell_stage(map, strips, level, true, StageMode::Full, None)?;
                     let (err, range) = run.expect("a stage that raises no degree always runs");
-                    (err, self.law.clone(), range, self.stage_rms)
+                    (err, self.fitted.law.clone(), range, self.stage_rms)
                 }
                 Some(prev) => match self.raise_degree(map, strips, level, cand, prev) {
                     Ok(Some(t)) => t,
@@ -81,7 +81,7 @@ impl Fitter<'_> {
                     }
                 },
             };
-            self.law = trial.1.clone();
+            self.fitted.law = trial.1.clone();
             self.journal.degree(format!(
                 "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
                 map.dir.name(),
@@ -90,10 +90,10 @@ impl Fitter<'_> {
                 level.1
             ));
             if let Some(prev) = &best {
-                let why = if map.eta(&self.law).degree() < degree {
+                let why = if map.eta(&self.fitted.law).degree() < degree {
                     Some("came out with a term too small to matter".to_string())
                 } else {
-                    super::plausible::implausible(&self.law, map, trial.2.as_ref())
+                    super::plausible::implausible(&self.fitted.law, map, trial.2.as_ref())
                 };
                 let why = why.or_else(|| {
                     (self.ctx.opts.fixed_degree.is_none()
@@ -126,7 +126,7 @@ impl Fitter<'_> {
             }
         }
         let (err, law, range, rms) = best.expect("one candidate at least");
-        self.law = law;
+        self.fitted.law = law;
         self.stage_rms = rms;
         Ok((err, range))
     }
@@ -227,9 +227,9 @@ impl Fitter<'_> {
     ) -> Result<Option<Trial>, FitError> {
         let mut law = law.clone();
         map.decode(&map.raise(from, beta), &mut law);
-        self.law = law;
+        self.fitted.law = law;
         let run = self.shell_stage(map, strips, level, true, mode, None)?;
-        Ok(run.map(|(err, range)| (err, self.law.clone(), range, self.stage_rms)))
+        Ok(run.map(|(err, range)| (err, self.fitted.law.clone(), range, self.stage_rms)))
     }
 }
 

@@ -38,7 +38,7 @@ impl Fitter<'_> {
         mode: StageMode,
         screen: Option<(f64, f64)>,
     ) -> StageRun {
-        let start = self.law.clone();
+        let start = self.fitted.law.clone();
         let run = self.shell_stage_once(map, strips, level, strain_range, mode, screen);
         let falls_back = mode == StageMode::Full && screen.is_none() && !map.coupling;
         let (stage, source) = match run {
@@ -47,14 +47,14 @@ impl Fitter<'_> {
         };
         let maps = self.fallback_maps(map);
         for linear in [false, true] {
-            self.law = start.clone();
+            self.fitted.law = start.clone();
             let mut changed = false;
             for m in &maps {
-                let note = super::plausible::cut_before_fall(&mut self.law, *m);
+                let note = super::plausible::cut_before_fall(&mut self.fitted.law, *m);
                 changed |= self.law_note(note);
             }
-            if linear && map.eta(&self.law) != &Eta::linear() {
-                *map.eta_mut(&mut self.law) = Eta::linear();
+            if linear && map.eta(&self.fitted.law) != &Eta::linear() {
+                *map.eta_mut(&mut self.fitted.law) = Eta::linear();
                 changed = true;
             }
             if !changed {
@@ -74,7 +74,7 @@ impl Fitter<'_> {
                 return Ok(done);
             }
         }
-        self.law = start;
+        self.fitted.law = start;
         Err(FitError::Stage {
             stage,
             source,

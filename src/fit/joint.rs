@@ -66,7 +66,10 @@ pub(super) fn stage_sets(opts: &FitOptions, own: Vec<Vec<usize>>, maps: &[StageM
 /// its yarn passes, started from the coarse shear law, left the shear stage at 0.68 % rms
 /// where the staged refit reached 0.34 %).
 pub(super) fn without_sweep_if_coupled(f: &mut Fitter, sets: &mut StageSets) {
-    let kept = matches!(f.coupling, super::coupling::CouplingOutcome::Kept { .. });
+    let kept = matches!(
+        f.fitted.coupling,
+        super::coupling::CouplingOutcome::Kept { .. }
+    );
     if kept && sets.joint.is_some() && f.ctx.opts.joint == Joint::Auto {
         sets.joint = None;
         let note = "joint sweep not run (--joint auto): the tension–shear coupling was kept, and its shear stage fits the yarn and shear terms together (--joint on forces the sweep)".to_string();

@@ -188,7 +188,7 @@ fn fit_level(
             // with the joint sweep a finer level refits the yarn stiffness over the joint
             // strips; η's shape stays the first level's (the mesh check measures it)
             f.joint_stiffness(maps[k], k, sets, level)?;
-            let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
+            let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
             f.law_note(note);
             continue;
         }
@@ -211,7 +211,7 @@ fn fit_level(
         if let Some((lo, hi)) = range {
             set_cutoff(f, k, lo, hi);
         }
-        let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
+        let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
         f.law_note(note);
     }
     Ok(())
@@ -220,7 +220,7 @@ fn fit_level(
 /// Direction `k`'s cut-off at 95 % of the largest strain its tests exercised (`lo`, `hi`:
 /// the strain range, Ẽ11, Ẽ22, Ẽ12), said.
 fn set_cutoff(f: &mut Fitter, k: usize, lo: [f64; 3], hi: [f64; 3]) {
-    let law = &mut f.law;
+    let law = &mut f.fitted.law;
     let msg = match k {
         0 => {
             law.cutoffs.e11 = (0.0, 0.95 * hi[0]);

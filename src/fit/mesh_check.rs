@@ -354,7 +354,7 @@ impl Fitter<'_> {
     /// The convergence order the fit's estimates of its strips' mesh errors assume
     /// ([`order`] for its grading, yarn rule and the law's current yarn-to-shear ratio).
     pub(super) fn mesh_order(&self) -> f64 {
-        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        let ratio = crate::material::Law::yarn_shear_ratio(&self.fitted.law);
         order(self.ctx.opts.grading, self.yarns(), ratio)
     }
 
@@ -365,9 +365,9 @@ impl Fitter<'_> {
         let mut out = Vec::new();
         for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
             let degree = match dir {
-                Direction::Warp => self.law.warp.degree(),
-                Direction::Weft => self.law.weft.degree(),
-                Direction::Shear => self.law.shear.degree(),
+                Direction::Warp => self.fitted.law.warp.degree(),
+                Direction::Weft => self.fitted.law.weft.degree(),
+                Direction::Shear => self.fitted.law.shear.degree(),
             };
             // the stage's linearisation on `level`, or on the coarser level of its last fit
             // (a stage the ladder did not refit)
@@ -392,8 +392,11 @@ impl Fitter<'_> {
     fn drape_angles(&mut self, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
         let data = self.ctx.data;
         let mut rigs = self.bend_rigs(&data.bend, level)?;
-        let (law, tau, bending): (_, _, Option<BendingRigidity>) =
-            (self.law.clone(), self.thickness, self.bending);
+        let (law, tau, bending): (_, _, Option<BendingRigidity>) = (
+            self.fitted.law.clone(),
+            self.fitted.thickness,
+            self.fitted.bending,
+        );
         let runs: Vec<_> = rigs
             .par_iter_mut()
             .map(|rig| {

@@ -324,6 +324,39 @@ struct Evidence {
     pub(super) ladder_check: Option<MeshCheck>,
 }
 
+/// The material being fitted: the stages' optima, applied in the order the stages run.
+struct Fitted {
+    law: Orthotropic,
+    thickness: f64,
+    /// the bends' own rigidities (`--bending`), once fitted
+    bending: Option<BendingRigidity>,
+    /// what the tension–shear coupling's trial decided ([`coupling`])
+    coupling: coupling::CouplingOutcome,
+}
+
+impl Fitted {
+    /// The fabric's material with these values.
+    fn material(&self, data: &FabricDataset) -> FabricMaterial {
+        FabricMaterial {
+            name: data.name.clone(),
+            areal_density: data.areal_density.unwrap_or(0.1),
+            thickness: self.thickness,
+            law: self.law.clone(),
+            bending: self.bending,
+        }
+    }
+
+    /// The parameters (law, thickness, rigidities): a prediction's memo key.
+    fn param_bits(&self) -> Vec<u64> {
+        let mut p = self.law.params();
+        p.push(self.thickness);
+        if let Some(b) = self.bending {
+            p.extend([b.warp, b.weft, b.twist]);
+        }
+        p.iter().map(|v| v.to_bits()).collect()
+    }
+}
+
 /// What every stage reads and none changes: the dataset, the options and what set-up decided.
 struct Context<'a> {
     data: &'a FabricDataset,
@@ -342,12 +375,10 @@ struct Fitter<'a> {
     /// progress lines, notes and the degree log
     journal: journal::Journal<'a>,
     stats: FitStats,
-    law: Orthotropic,
-    thickness: f64,
+    /// the material being fitted
+    fitted: Fitted,
     /// drape angles of the bend tests at the last thickness or bending stage's result
     bend_angles: Vec<f64>,
-    /// the bends' own rigidities (`--bending`), once fitted
-    bending: Option<BendingRigidity>,
     /// what the stages leave for the standard errors and the mesh check
     evidence: Evidence,
     /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
@@ -356,8 +387,6 @@ struct Fitter<'a> {
     ladder_meshes: bool,
     /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
     lab: WarmLab,
-    /// what the tension–shear coupling's trial decided ([`coupling`])
-    coupling: coupling::CouplingOutcome,
     /// the rms relative error of the last tensile stage run (of the kept degree after a
     /// degree ladder)
     stage_rms: f64,
@@ -374,16 +403,6 @@ impl Fitter<'_> {
         true
     }
 
-    fn material(&self) -> FabricMaterial {
-        FabricMaterial {
-            name: self.ctx.data.name.clone(),
-            areal_density: self.ctx.data.areal_density.unwrap_or(0.1),
-            thickness: self.thickness,
-            law: self.law.clone(),
-            bending: self.bending,
-        }
-    }
-
     /// Every fitted parameter's standard error: each tensile stage's last run at the law's
     /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
     /// or bending stage's.
@@ -391,9 +410,9 @@ impl Fitter<'_> {
         let mut out = Vec::new();
         for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
             let (eta, c) = match dir {
-                Direction::Warp => (&self.law.warp, self.law.a11),
-                Direction::Weft => (&self.law.weft, self.law.a22),
-                Direction::Shear => (&self.law.shear, self.law.g12),
+                Direction::Warp => (&self.fitted.law.warp, self.fitted.law.a11),
+                Direction::Weft => (&self.fitted.law.weft, self.fitted.law.a22),
+                Direction::Shear => (&self.fitted.law.shear, self.fitted.law.g12),
             };
             let found = self
                 .evidence
@@ -418,16 +437,6 @@ impl Fitter<'_> {
         }
         out.extend(self.evidence.stage_errors.iter().cloned());
         out
-    }
-
-    /// The current parameters (law, thickness, rigidities): a prediction's memo key.
-    fn param_bits(&self) -> Vec<u64> {
-        let mut p = self.law.params();
-        p.push(self.thickness);
-        if let Some(b) = self.bending {
-            p.extend([b.warp, b.weft, b.twist]);
-        }
-        p.iter().map(|v| v.to_bits()).collect()
     }
 }
 

@@ -11,7 +11,7 @@ use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
     bending, coupling, is_determined, joint, ladder, preprocess, refine, stages, uncertainty,
-    validation, Context, FitError, FitOptions, FitResult, FitStats, Fitter,
+    validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, Orthotropic};
@@ -57,7 +57,7 @@ pub fn fit(
     f.stats.time_stage("report", t0);
     closing_notes(&mut f);
     f.stats.seconds = f.journal.elapsed();
-    let material = f.material();
+    let material = f.fitted.material(f.ctx.data);
     let yarn_rule = f.yarns();
     let (notes, degree_log) = f.journal.finish();
     Ok(FitResult {
@@ -74,7 +74,7 @@ pub fn fit(
         mesh_check,
         shapes_fitted,
         yarn_rule,
-        shear_coupling: f.coupling,
+        shear_coupling: f.fitted.coupling,
         objective: f.ctx.prep.misfit,
         joint: sets.joint.is_some(),
         test_meshes: opts.test_meshes,
@@ -170,25 +170,27 @@ impl<'a> Fitter<'a> {
             },
             journal: Journal::new(progress, start, setup.notes),
             stats: FitStats::default(),
-            law: Orthotropic {
-                a11: known.a11.unwrap_or(1.0e8),
-                a22: known.a22.unwrap_or(1.0e8),
-                a12: 0.5e8,
-                g12: known.g12.unwrap_or(2.0e6),
-                warp: Eta::linear(),
-                weft: Eta::linear(),
-                shear: Eta::linear(),
-                cutoffs: Cutoffs::none(),
-                coupling: None,
+            fitted: Fitted {
+                law: Orthotropic {
+                    a11: known.a11.unwrap_or(1.0e8),
+                    a22: known.a22.unwrap_or(1.0e8),
+                    a12: 0.5e8,
+                    g12: known.g12.unwrap_or(2.0e6),
+                    warp: Eta::linear(),
+                    weft: Eta::linear(),
+                    shear: Eta::linear(),
+                    cutoffs: Cutoffs::none(),
+                    coupling: None,
+                },
+                thickness: known.thickness.unwrap_or(data.thickness),
+                bending: None,
+                coupling: coupling::CouplingOutcome::Off,
             },
-            thickness: known.thickness.unwrap_or(data.thickness),
             bend_angles: Vec::new(),
-            bending: None,
             evidence: Default::default(),
             bend_refine: 0,
             lab: Default::default(),
             ladder_meshes: false,
-            coupling: coupling::CouplingOutcome::Off,
             stage_rms: f64::NAN,
             screened: None,
         }

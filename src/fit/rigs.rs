@@ -51,7 +51,7 @@ impl Fitter<'_> {
     /// fit of `paper_repro/stiff_fit` the bootstrap's ratio is far below the truth, and its β
     /// on every level biased G12 by −0.97 %).
     pub(super) fn pin_yarns(&mut self) {
-        self.lab.yarn_ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        self.lab.yarn_ratio = crate::material::Law::yarn_shear_ratio(&self.fitted.law);
     }
 
     /// The rule of a strip cut at `angle`: the fit's, but `auto` keeps the full rule where
@@ -67,7 +67,7 @@ impl Fitter<'_> {
     /// Decides `--yarn-rule auto` by the bootstrapped law's yarn-to-shear ratio, so that
     /// every strip of the fit shares one discretisation, and says so.
     pub(super) fn decide_yarns(&mut self) {
-        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+        let ratio = crate::material::Law::yarn_shear_ratio(&self.fitted.law);
         let rule = self.ctx.opts.yarn_rule.resolve(ratio);
         self.lab.yarns = Some(rule);
         self.lab.yarn_ratio = ratio;
@@ -110,7 +110,7 @@ impl Fitter<'_> {
         t.solver.rtol = FIT_RTOL;
         t.solver.strategy = self.ctx.opts.strategy;
         let mut rig = t
-            .rig(&self.material(), &strip.nodes)
+            .rig(&self.fitted.material(self.ctx.data), &strip.nodes)
             .map_err(|source| FitError::Scene {
                 stage: format!("setting up the {angle}° strip"),
                 source,
@@ -157,8 +157,8 @@ impl Fitter<'_> {
         law: &Orthotropic,
         sens: bool,
     ) -> Result<NodeForces, SceneError> {
-        rig.set_material(law, self.thickness)?;
-        rig.set_bending(self.bending);
+        rig.set_material(law, self.fitted.thickness)?;
+        rig.set_bending(self.fitted.bending);
         let pts = rig.run(sens)?;
         let newton = pts.iter().map(|p| p.report.iterations).sum();
         self.stats.record(Work::run(pts.len(), newton));
@@ -177,8 +177,8 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<Vec<f64>, FitError> {
         let (key, mut rig) = self.strip_rig(s, angle, level)?;
-        let law = self.law.clone();
-        let memo_key = (key.clone(), self.param_bits());
+        let law = self.fitted.law.clone();
+        let memo_key = (key.clone(), self.fitted.param_bits());
         if let Some(f) = self.lab.predictions.get(&memo_key) {
             let f = f.clone();
             self.keep_rig(key, rig);
@@ -238,8 +238,8 @@ impl Fitter<'_> {
         jobs: &[(usize, f64, (usize, usize))],
     ) -> Result<Vec<Vec<f64>>, FitError> {
         use rayon::prelude::*;
-        let law = self.law.clone();
-        let bits = self.param_bits();
+        let law = self.fitted.law.clone();
+        let bits = self.fitted.param_bits();
         let mut todo: Vec<(RigKey, StripRig, f64)> = Vec::new();
         for &(s, angle, level) in jobs {
             let (key, rig) = self.strip_rig(s, angle, level)?;
@@ -254,7 +254,7 @@ impl Fitter<'_> {
                 todo.push((key, rig, angle));
             }
         }
-        let (tau, bending) = (self.thickness, self.bending);
+        let (tau, bending) = (self.fitted.thickness, self.fitted.bending);
         // taken in order by whichever thread is free (not split in halves): two long solves
         // next to each other go to different cores
         let mut results: Vec<(usize, Result<Vec<crate::scene::TensilePoint>, SceneError>)> = todo

@@ -87,12 +87,12 @@ impl Fitter<'_> {
         if targets.is_empty() {
             return Ok(false);
         }
-        let g0 = self.law.g12;
+        let g0 = self.fitted.law.g12;
         let mut scan = ShearScan {
             targets: &targets,
             g0,
             evaluations: 0,
-            material: self.material(),
+            material: self.fitted.material(self.ctx.data),
             solved: Default::default(),
         };
         let Some((g12, f)) = scan.fit(Objective::Shapes) else {
@@ -129,7 +129,7 @@ impl Fitter<'_> {
             self.stats.time_stage("shapes", t0);
             return Ok(false);
         };
-        self.law.g12 = g12;
+        self.fitted.law.g12 = g12;
         let evaluations = scan.evaluations;
         self.stats.record(Work {
             evaluations,

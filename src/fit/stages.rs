@@ -44,7 +44,7 @@ impl Fitter<'_> {
         curves: &[usize],
         starts: Vec<Vec<f64>>,
     ) -> Option<(Vec<f64>, f64, f64)> {
-        let (prep, law, tau) = (&self.ctx.prep, &self.law, self.thickness);
+        let (prep, law, tau) = (&self.ctx.prep, &self.fitted.law, self.fitted.thickness);
         let fits: Vec<_> = starts
             .into_par_iter()
             .map(|p0| homogeneous_fit(prep, law, tau, map, curves, p0, None))
@@ -69,7 +69,8 @@ impl Fitter<'_> {
             let s = &self.ctx.prep.strips[curve.strip];
             let (dl, f) = *curve.points.last().expect("a curve with points");
             let lambda = 1.0 + dl / s.length;
-            let secant = f / (s.width * self.thickness * lambda * super::green(dl, s.length));
+            let secant =
+                f / (s.width * self.fitted.thickness * lambda * super::green(dl, s.length));
             match map.dir {
                 Direction::Shear => 0.25 * secant,
                 _ => secant,
@@ -86,7 +87,7 @@ impl Fitter<'_> {
             })
             .collect();
         let Some(mut chosen) = self.bootstrap_best(map, curves, starts) else {
-            return (map.encode(&self.law), Vec::new());
+            return (map.encode(&self.fitted.law), Vec::new());
         };
         let mut all = vec![chosen.0.clone()];
         self.log_degree(format!(
@@ -120,11 +121,11 @@ impl Fitter<'_> {
                 break;
             };
             if fixed.is_none() {
-                let mut law = self.law.clone();
+                let mut law = self.fitted.law.clone();
                 map.decode(&candidate.0, &mut law);
-                let saved = std::mem::replace(&mut self.law, law);
-                let why = super::plausible::implausible(&self.law, map, None);
-                self.law = saved;
+                let saved = std::mem::replace(&mut self.fitted.law, law);
+                let why = super::plausible::implausible(&self.fitted.law, map, None);
+                self.fitted.law = saved;
                 if let Some(why) = why {
                     self.log_degree(format!(
                         "{}: degree {} kept: degree {degree} {why} (homogeneous strip)",
@@ -171,7 +172,7 @@ impl Fitter<'_> {
     /// fail. The shear's degree is chosen again on the shell ([`super::degrees`]), where such
     /// a raise that fails to solve keeps the lower degree.
     fn yarn_law_falls(&self, map: StageMap, p: &[f64]) -> bool {
-        let mut law = self.law.clone();
+        let mut law = self.fitted.law.clone();
         map.decode(p, &mut law);
         map.dir != Direction::Shear && super::plausible::falls_eventually(map.eta(&law))
     }
@@ -222,7 +223,7 @@ impl Fitter<'_> {
         )
         .map_err(stage_failed(map, level))?;
         self.stats.record(sp.counts.work());
-        map.decode(&p, &mut self.law);
+        map.decode(&p, &mut self.fitted.law);
         let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
         let shape = self.stage_optimum(&sp, &p, err);
         let msg = self.stage_line(&sp, &p, (err, shape), &rep);
@@ -261,8 +262,8 @@ impl Fitter<'_> {
         for &s in strips {
             let angle = self.ctx.prep.strips[s].angle_deg;
             let (key, mut rig) = self.strip_rig(s, angle, level)?;
-            rig.set_wanted(Some(map.wanted(&self.law)));
-            rig.set_bending(self.bending);
+            rig.set_wanted(Some(map.wanted(&self.fitted.law)));
+            rig.set_bending(self.fitted.bending);
             rigs.push((key, rig));
         }
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.ctx.used_curves(&[s])).collect();
@@ -275,8 +276,8 @@ impl Fitter<'_> {
         Ok(StageProblem {
             map,
             level,
-            base: self.law.clone(),
-            tau: self.thickness,
+            base: self.fitted.law.clone(),
+            tau: self.fitted.thickness,
             strips,
             curves,
             ncurves,
@@ -352,8 +353,8 @@ impl Fitter<'_> {
     /// The stage's start from the current law, the tension–shear coupling moved back from a
     /// saturated bound (and said so).
     fn unsaturated_start(&mut self, map: StageMap) -> Vec<f64> {
-        let p = map.encode_start(&self.law);
-        if p != map.encode(&self.law) {
+        let p = map.encode_start(&self.fitted.law);
+        if p != map.encode(&self.fitted.law) {
             self.journal.say(&format!(
                 "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
                 map.dir.name(),
@@ -381,18 +382,32 @@ impl Fitter<'_> {
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
-            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.law);
+            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.fitted.law);
             self.evidence
                 .uncertainty
                 .push((map.dir, p.to_vec(), errors));
             let tau = sp.tau;
-            let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
-                super::uncertainty::offaxis_rows(&self.ctx.prep, &self.law, tau, &map, p, sp.strips)
+            let offaxis = (map.coupling && self.fitted.law.coupling.is_some()).then(|| {
+                super::uncertainty::offaxis_rows(
+                    &self.ctx.prep,
+                    &self.fitted.law,
+                    tau,
+                    &map,
+                    p,
+                    sp.strips,
+                )
             });
             self.evidence
                 .linearised
                 .push(super::mesh_check::Linearised::tensile(
-                    &map, p, &self.law, sp.strips, sp.level, j, lens, offaxis,
+                    &map,
+                    p,
+                    &self.fitted.law,
+                    sp.strips,
+                    sp.level,
+                    j,
+                    lens,
+                    offaxis,
                 ));
         }
         shape
@@ -451,7 +466,7 @@ impl Fitter<'_> {
         rigs: &mut [(RigKey, StripRig)],
     ) -> Result<Option<StrainRange>, FitError> {
         let mut range: Option<StrainRange> = None;
-        let law = self.law.clone();
+        let law = self.fitted.law.clone();
         for (_, rig) in rigs {
             self.run_rig(rig, &law, false)
                 .map_err(|source| FitError::Scene {
@@ -505,22 +520,22 @@ pub(super) fn bootstrap_all(
         let curves = f.ctx.used_curves(&strips[k]);
         if !curves.is_empty() {
             let (q, _) = f.bootstrap(maps[k], &curves);
-            let mut law = f.law.clone();
+            let mut law = f.fitted.law.clone();
             maps[k].decode(&q, &mut law);
-            f.law = law;
+            f.fitted.law = law;
         }
     }
     let known = &f.ctx.data.known;
     match (strips[0].is_empty(), strips[1].is_empty()) {
         (true, false) if known.a11.is_none() => {
-            f.law.a11 = f.law.a22;
-            f.law.warp = f.law.weft.clone();
+            f.fitted.law.a11 = f.fitted.law.a22;
+            f.fitted.law.warp = f.fitted.law.weft.clone();
             f.journal
                 .note("warp not fitted (no 90° test): taken equal to the weft".into());
         }
         (false, true) if known.a22.is_none() => {
-            f.law.a22 = f.law.a11;
-            f.law.weft = f.law.warp.clone();
+            f.fitted.law.a22 = f.fitted.law.a11;
+            f.fitted.law.weft = f.fitted.law.warp.clone();
             f.journal
                 .note("weft not fitted (no 0° test): taken equal to the warp".into());
         }
@@ -533,10 +548,10 @@ pub(super) fn bootstrap_all(
     // a yarn law whose stress stops rising a little past the tests (a `--degree` the
     // bootstrap kept whatever it does, a softening degree 1) is cut off below that
     for map in &maps[..2] {
-        let note = super::plausible::cut_before_fall(&mut f.law, *map);
+        let note = super::plausible::cut_before_fall(&mut f.fitted.law, *map);
         f.law_note(note);
     }
-    f.ctx.a12.apply(&mut f.law);
+    f.ctx.a12.apply(&mut f.fitted.law);
     // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
     // the two agree best) it misjudges the strip badly (a shape error of 12–18 % over 22.5°,
     // 45° and 67.5° on the bundled fabrics, with starts the shell could not solve), so the
@@ -553,13 +568,13 @@ pub(super) fn bootstrap_all(
     let shear = f.ctx.used_curves(&bias);
     if !shear.is_empty() {
         let (q, all) = f.bootstrap(maps[2], &shear);
-        let mut law = f.law.clone();
+        let mut law = f.fitted.law.clone();
         maps[2].decode(&q, &mut law);
-        f.law = law;
+        f.fitted.law = law;
         shear_candidates = all;
     } else if f.ctx.data.known.g12.is_none() {
-        f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
-        let g12 = f.law.g12;
+        f.fitted.law.g12 = 0.02 * f.fitted.law.a11.min(f.fitted.law.a22);
+        let g12 = f.fitted.law.g12;
         f.journal.note(format!(
             "{}: linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa",
             super::shapes::SHEAR_ASSUMED

@@ -66,18 +66,20 @@ impl Fitter<'_> {
                     bend.mesh = mesh;
                     bend.solver.rtol = super::FIT_RTOL;
                     bend.solver.strategy = self.ctx.opts.strategy;
-                    BendRig::new(&bend, &self.material()).map_err(|source| FitError::Scene {
-                        stage: format!("setting up the {}° cantilever", b.angle_deg),
-                        source,
+                    BendRig::new(&bend, &self.fitted.material(self.ctx.data)).map_err(|source| {
+                        FitError::Scene {
+                            stage: format!("setting up the {}° cantilever", b.angle_deg),
+                            source,
+                        }
                     })?
                 }
             };
-            rig.set_material(&self.law, self.thickness)
+            rig.set_material(&self.fitted.law, self.fitted.thickness)
                 .map_err(|source| FitError::Scene {
                     stage: format!("setting up the {}° cantilever", b.angle_deg),
                     source,
                 })?;
-            rig.set_bending(self.bending);
+            rig.set_bending(self.fitted.bending);
             out.push(rig);
         }
         Ok(out)
@@ -106,7 +108,7 @@ impl Fitter<'_> {
     ) -> Result<(), FitError> {
         let t0 = Instant::now();
         let mut rigs = self.bend_rigs(bends, level)?;
-        let (law0, tau0) = (self.law.clone(), self.thickness);
+        let (law0, tau0) = (self.fitted.law.clone(), self.fitted.thickness);
         let scaled = |q: &[f64]| {
             let tau = tau0 * q[0].exp();
             let s = tau0 / tau;
@@ -186,12 +188,12 @@ impl Fitter<'_> {
             self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.keep_bend_rigs(bends, level, rigs);
-        self.law = law;
+        self.fitted.law = law;
         // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
         if let super::map::A12Rule::Fixed(_) = self.ctx.a12 {
-            self.ctx.a12.apply(&mut self.law);
+            self.ctx.a12.apply(&mut self.fitted.law);
         }
-        self.thickness = tau;
+        self.fitted.thickness = tau;
         let msg = format!(
             "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
             self.bend_level(level).0,

@@ -90,7 +90,7 @@ impl Fitter<'_> {
             return Ok(None);
         }
         let nodes = self.predict_many(&jobs, level)?;
-        let material = self.material();
+        let material = self.fitted.material(self.ctx.data);
         let mut checks = Vec::new();
         for &(s, _) in &jobs {
             let strip = &self.ctx.prep.strips[s];
@@ -357,10 +357,12 @@ fn bend_outcomes(
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
             bend.yarn_rule = f.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
             bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
-            let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
-                stage: format!("predicting the {}° cantilever", b.angle_deg),
-                source,
-            })?;
+            let r = bend
+                .run(&f.fitted.material(f.ctx.data))
+                .map_err(|source| FitError::Scene {
+                    stage: format!("predicting the {}° cantilever", b.angle_deg),
+                    source,
+                })?;
             f.bend_angles.push(r.drape_angle_deg);
         }
     }
@@ -390,8 +392,8 @@ fn bend_outcomes(
 
 /// Which quantities the data determined and which were assumed, with their values.
 pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> {
-    let l = &f.law;
-    let tau = f.thickness;
+    let l = &f.fitted.law;
+    let tau = f.fitted.thickness;
     let e1 = l.a11 - l.a12 * l.a12 / l.a22;
     let e2 = l.a22 - l.a12 * l.a12 / l.a11;
     let nu12 = l.a12 / l.a22;
@@ -433,7 +435,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
         ),
         A12Rule::Fixed(v) => format!("a12 = {v:.4e} Pa: known; G12 = {:.4e} Pa determined with it", l.g12),
     });
-    if let Some(b) = f.bending {
+    if let Some(b) = f.fitted.bending {
         let off_axis = f
             .ctx
             .data
@@ -458,7 +460,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
     }
     // the tension–shear coupling: what the off-axis strips said of it
     use super::coupling::CouplingOutcome;
-    let coupling = match (&f.coupling, l.coupling) {
+    let coupling = match (&f.fitted.coupling, l.coupling) {
         (CouplingOutcome::Kept { without, with }, Some(c)) => Some(format!(
             "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty]), together with η4's exponents, which it trades off against along the strips' paths: what the strips pin down is each off-axis strip's stress (bias_stress_* in [fit.mesh_check])",
             c.warp, c.weft
@@ -474,7 +476,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
     out.extend(coupling);
     out.push(if k.thickness.is_some() {
         format!("thickness τ = {:.4} mm: known", tau * 1e3)
-    } else if f.bending.is_some() {
+    } else if f.fitted.bending.is_some() {
         format!(
             "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
             tau * 1e3
