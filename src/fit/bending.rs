@@ -89,7 +89,7 @@ impl Fitter<'_> {
                 twist: twist_following(w, f, ratio),
             }
         });
-        let mut rigs = self.bend_rigs(bends, level)?;
+        let mut rigs = self.lab.bend_rigs(&self.ctx, &self.fitted, bends, level)?;
         // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
         let rigidity = Rigidity {
             b0,
@@ -131,12 +131,12 @@ impl Fitter<'_> {
             self.bend_angles.push(pt.drape_angle_deg);
             self.stats.record(Work::run(1, pt.report.iterations));
         }
-        self.keep_bend_rigs(bends, level, rigs);
+        self.lab.keep_bend_rigs(bends, level, rigs);
         self.fitted.bending = Some(b);
         let msg = format!(
             "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
-            self.bend_level(level).0,
-            self.bend_level(level).1,
+            self.lab.bend_level(level).0,
+            self.lab.bend_level(level).1,
             b.warp,
             b.weft,
             b.twist,

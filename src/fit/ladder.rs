@@ -38,7 +38,7 @@ pub(super) fn ladder(
                 break;
             }
         }
-        f.pin_yarns();
+        f.lab.pin_yarns(&f.fitted.law);
         if let Some(prev) = &previous {
             let (skip, check) = refinement_check(f, prev, &all, from, level)?;
             if let Some(note) = skip {
@@ -84,13 +84,13 @@ fn skipped_by_estimate(
     from: (usize, usize),
     level: (usize, usize),
 ) -> bool {
-    let estimate = m.next_level(f.mesh_order());
+    let estimate = m.next_level(super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted));
     if estimate.passes() {
         let note = format!(
             "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below {})",
             level.0, level.1, from.0, from.1, m.parameter,
             100.0 * estimate.change, 100.0 * estimate.curve_change,
-            100.0 * m.change, 100.0 * m.curve_change, f.mesh_order(),
+            100.0 * m.change, 100.0 * m.curve_change, super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted),
             super::mesh_check::rules_in_words()
         );
         f.journal.say(&note);

@@ -24,7 +24,8 @@
 
 mod notes;
 
-use super::{FitError, Fitter, Work};
+use super::rigs::Lab;
+use super::{Context, FitError, Fitted, Fitter, Work};
 use crate::material::BendingRigidity;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -350,14 +351,14 @@ impl MeshCheck {
     }
 }
 
-impl Fitter<'_> {
-    /// The convergence order the fit's estimates of its strips' mesh errors assume
-    /// ([`order`] for its grading, yarn rule and the law's current yarn-to-shear ratio).
-    pub(super) fn mesh_order(&self) -> f64 {
-        let ratio = crate::material::Law::yarn_shear_ratio(&self.fitted.law);
-        order(self.ctx.opts.grading, self.yarns(), ratio)
-    }
+/// The convergence order the fit's estimates of its strips' mesh errors assume ([`order`] for
+/// its grading, the lab's yarn rule and the fitted law's yarn-to-shear ratio).
+pub(super) fn mesh_order(lab: &Lab, ctx: &Context, m: &Fitted) -> f64 {
+    let ratio = crate::material::Law::yarn_shear_ratio(&m.law);
+    order(ctx.opts.grading, lab.yarns(), ratio)
+}
 
+impl Fitter<'_> {
     /// The tensile stages' latest linearisations at the law's final degrees, then the bend
     /// stage's, all on `level`.
     fn final_linearisations(&self, level: (usize, usize)) -> Vec<Linearised> {
@@ -391,7 +392,9 @@ impl Fitter<'_> {
     /// Drape angles of every bend test on `level` at the current material.
     fn drape_angles(&mut self, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
         let data = self.ctx.data;
-        let mut rigs = self.bend_rigs(&data.bend, level)?;
+        let mut rigs = self
+            .lab
+            .bend_rigs(&self.ctx, &self.fitted, &data.bend, level)?;
         let (law, tau, bending): (_, _, Option<BendingRigidity>) = (
             self.fitted.law.clone(),
             self.fitted.thickness,
@@ -410,7 +413,7 @@ impl Fitter<'_> {
             evaluations: runs.len(),
             ..Work::default()
         });
-        self.keep_bend_rigs(&data.bend, level, rigs);
+        self.lab.keep_bend_rigs(&data.bend, level, rigs);
         let runs: Vec<(f64, usize)> =
             runs.into_iter()
                 .collect::<Result<Vec<_>, _>>()
@@ -460,7 +463,10 @@ impl Fitter<'_> {
         // the defect towards the solved mesh, and the factor that makes it the one to `finer`
         let (solved_on, factor) = match mode {
             MeshCheckMode::Fine => (finer, 1.0),
-            _ => (coarse, -(2f64.powf(-self.mesh_order()))),
+            _ => (
+                coarse,
+                -(2f64.powf(-mesh_order(&self.lab, &self.ctx, &self.fitted))),
+            ),
         };
         self.journal.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
@@ -559,13 +565,19 @@ impl Fitter<'_> {
             .iter()
             .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
-        let (coarse, fine) = self.predict_pair(&jobs, last, finer)?;
+        let (coarse, fine) = self.lab.predict_pair(
+            &self.ctx,
+            &self.fitted,
+            &mut self.stats,
+            &jobs,
+            (last, finer),
+        )?;
         let (mut dr, mut labels) = (Vec::new(), Vec::new());
         for (i, &s) in strips.iter().enumerate() {
             for c in self.ctx.used_curves(&[s]) {
                 let (a, b) = (
-                    self.curve_forces(c, &coarse[i]),
-                    self.curve_forces(c, &fine[i]),
+                    self.ctx.curve_forces(c, &coarse[i]),
+                    self.ctx.curve_forces(c, &fine[i]),
                 );
                 let points = &self.ctx.prep.curves[c].points;
                 let w = 1.0 / (points.len() as f64).sqrt();

@@ -79,7 +79,7 @@ pub mod verdict;
 
 use crate::dataset::FabricDataset;
 use crate::material::{BendingRigidity, FabricMaterial, Orthotropic};
-use crate::scene::{SceneError, StripRig};
+use crate::scene::SceneError;
 pub use bending::BendingMode;
 use map::{A12Rule, Direction};
 use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
@@ -92,7 +92,7 @@ pub use pipeline::fit;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
 pub use refine::{TestMeshes, MAX_DOUBLINGS as REFINE_DOUBLINGS, MAX_FACES as REFINE_MAX_FACES};
-use std::{collections::HashMap, time::Instant};
+use std::time::Instant;
 use tolerances::{FIT_RTOL, NEAR_ANGLE_DEG, POLISH_XTOL, TRIAL_RETRY_ITERATIONS};
 
 /// The fit could not be done.
@@ -294,21 +294,6 @@ fn is_determined(uncertainty: &[uncertainty::ParamError], name: &str) -> bool {
         .is_none_or(|e| e.determined)
 }
 
-/// The virtual lab a fit keeps warm across its stages ([`rigs`], [`thickness`]).
-#[derive(Default)]
-struct WarmLab {
-    /// strips already set up, warm
-    pub(super) rigs: HashMap<RigKey, StripRig>,
-    /// cantilevers already set up, warm ([`Fitter::bend_rigs`])
-    pub(super) bend_cache: HashMap<thickness::BendKey, crate::scene::BendRig>,
-    /// node forces already predicted, by strip and parameter bits
-    pub(super) predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
-    /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
-    pub(super) yarns: Option<crate::assembly::YarnRule>,
-    /// the yarn-to-shear ratio that sets new strips' β ([`Fitter::pin_yarns`])
-    pub(super) yarn_ratio: Option<f64>,
-}
-
 /// What the stages leave at their optima for the standard errors ([`uncertainty`]) and the
 /// mesh check ([`mesh_check`]).
 #[derive(Default)]
@@ -381,12 +366,8 @@ struct Fitter<'a> {
     bend_angles: Vec<f64>,
     /// what the stages leave for the standard errors and the mesh check
     evidence: Evidence,
-    /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
-    bend_refine: u32,
-    /// every strip on the ladder's level whatever its own refinement (cheap diagnostics)
-    ladder_meshes: bool,
     /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
-    lab: WarmLab,
+    lab: rigs::Lab,
     /// the rms relative error of the last tensile stage run (of the kept degree after a
     /// degree ladder)
     stage_rms: f64,

@@ -10,7 +10,7 @@ use super::measures::{self, Misfit, Objective};
 use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
-    bending, coupling, is_determined, joint, ladder, preprocess, refine, stages, uncertainty,
+    bending, coupling, is_determined, joint, ladder, preprocess, refine, rigs, stages, uncertainty,
     validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
@@ -32,7 +32,9 @@ pub fn fit(
     let mut maps = stage_maps(&f, &strips);
     require_yarn_data(&f, &strips)?;
     let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
-    f.decide_yarns();
+    if let Some(note) = f.lab.decide_yarns(opts, &f.fitted.law) {
+        f.journal.note(note);
+    }
     let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
     let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
     if sets.joint.is_some() {
@@ -58,7 +60,7 @@ pub fn fit(
     closing_notes(&mut f);
     f.stats.seconds = f.journal.elapsed();
     let material = f.fitted.material(f.ctx.data);
-    let yarn_rule = f.yarns();
+    let yarn_rule = f.lab.yarns();
     let (notes, degree_log) = f.journal.finish();
     Ok(FitResult {
         material,
@@ -160,7 +162,9 @@ impl<'a> Fitter<'a> {
         setup: SetUp,
     ) -> Self {
         let known = &data.known;
+        let lab = rigs::Lab::new(setup.prep.strips.len());
         Fitter {
+            lab,
             ctx: Context {
                 data,
                 opts,
@@ -188,9 +192,6 @@ impl<'a> Fitter<'a> {
             },
             bend_angles: Vec::new(),
             evidence: Default::default(),
-            bend_refine: 0,
-            lab: Default::default(),
-            ladder_meshes: false,
             stage_rms: f64::NAN,
             screened: None,
         }

@@ -243,7 +243,7 @@ impl Fitter<'_> {
             None
         };
         for (key, rig) in sp.rigs {
-            self.keep_rig(key, rig);
+            self.lab.keep_rig(key, rig);
         }
         self.stats.time_stage(map.dir.name(), t0);
         self.stage_rms = err;
@@ -261,7 +261,9 @@ impl Fitter<'_> {
         let mut rigs = Vec::new();
         for &s in strips {
             let angle = self.ctx.prep.strips[s].angle_deg;
-            let (key, mut rig) = self.strip_rig(s, angle, level)?;
+            let (key, mut rig) = self
+                .lab
+                .strip_rig(&self.ctx, &self.fitted, s, angle, level)?;
             rig.set_wanted(Some(map.wanted(&self.fitted.law)));
             rig.set_bending(self.fitted.bending);
             rigs.push((key, rig));
@@ -340,7 +342,7 @@ impl Fitter<'_> {
             self.stats.record(sp.counts.work());
             self.log_degree(note);
             for (key, rig) in std::mem::take(&mut sp.rigs) {
-                self.keep_rig(key, rig);
+                self.lab.keep_rig(key, rig);
             }
             return Ok(false);
         }
@@ -445,11 +447,11 @@ impl Fitter<'_> {
             .iter()
             .map(|&s| {
                 let strip = &self.ctx.prep.strips[s];
-                if strip.refine == 0 {
+                if !self.lab.is_refined(s) {
                     format!("{}°", strip.angle_deg)
                 } else {
                     let m = super::rigs::strip_mesh(
-                        self.strip_level(s, level),
+                        self.lab.strip_level(s, level),
                         strip.width,
                         strip.length,
                     );
@@ -468,11 +470,12 @@ impl Fitter<'_> {
         let mut range: Option<StrainRange> = None;
         let law = self.fitted.law.clone();
         for (_, rig) in rigs {
-            self.run_rig(rig, &law, false)
-                .map_err(|source| FitError::Scene {
+            super::rigs::run_rig(rig, &law, &self.fitted, &mut self.stats, false).map_err(
+                |source| FitError::Scene {
                     stage: format!("{} strips at the fit", map.dir.name()),
                     source,
-                })?;
+                },
+            )?;
             if let Some((lo, hi)) = rig.strain_range() {
                 let r = range.get_or_insert((lo, hi));
                 for i in 0..3 {
@@ -495,11 +498,13 @@ impl Fitter<'_> {
             .iter()
             .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
-        let nodes = self.predict_many(&jobs, level)?;
+        let nodes =
+            self.lab
+                .predict_many(&self.ctx, &self.fitted, &mut self.stats, &jobs, level)?;
         let mut out = Vec::new();
         for (&s, node) in strips.iter().zip(&nodes) {
             for c in self.ctx.used_curves(&[s]) {
-                out.extend(self.curve_forces(c, node));
+                out.extend(self.ctx.curve_forces(c, node));
             }
         }
         Ok(out)

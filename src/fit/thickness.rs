@@ -3,7 +3,8 @@
 //! fits, are kept (the bending rigidity goes as a·τ³/12).
 
 use super::optim::{minimize, Evaluation};
-use super::{to_evaluation, FitError, Fitter, Work};
+use super::rigs::Lab;
+use super::{to_evaluation, Context, FitError, Fitted, Fitter, Work};
 use crate::dataset::BendTest;
 use crate::scene::{BendRig, CantileverBend, SceneError};
 use rayon::prelude::*;
@@ -42,15 +43,17 @@ pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize
     (nx, ny)
 }
 
-impl Fitter<'_> {
-    /// The bend tests' cantilevers on a ladder level, with the current material's bending:
+impl Lab {
+    /// The bend tests' cantilevers on a ladder level, set to material `m`:
     /// from the cache, warm from their last equilibria, or set up; hand them back with
-    /// [`Fitter::keep_bend_rigs`]. Set up anew, a stiff cantilever's first solve is a load
+    /// [`Lab::keep_bend_rigs`]. Set up anew, a stiff cantilever's first solve is a load
     /// ramp from the flat strip (the ratio-2e4 fit's 190 mm weft cantilever on 16 × 24's mesh
     /// takes 132 Newton iterations, about 6 s), which the cache spares each later thickness
     /// stage and mesh check.
     pub(super) fn bend_rigs(
         &mut self,
+        ctx: &Context,
+        m: &Fitted,
         bends: &[BendTest],
         level: (usize, usize),
     ) -> Result<Vec<BendRig>, FitError> {
@@ -58,15 +61,15 @@ impl Fitter<'_> {
         let mut out = Vec::with_capacity(bends.len());
         for b in bends {
             let mesh = bend_mesh(mesh_level, b);
-            let mut rig = match self.lab.bend_cache.remove(&bend_key(b, mesh)) {
+            let mut rig = match self.bend_cache.remove(&bend_key(b, mesh)) {
                 Some(rig) => rig,
                 None => {
                     let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-                    bend.yarn_rule = self.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
+                    bend.yarn_rule = ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
                     bend.mesh = mesh;
                     bend.solver.rtol = super::FIT_RTOL;
-                    bend.solver.strategy = self.ctx.opts.strategy;
-                    BendRig::new(&bend, &self.fitted.material(self.ctx.data)).map_err(|source| {
+                    bend.solver.strategy = ctx.opts.strategy;
+                    BendRig::new(&bend, &m.material(ctx.data)).map_err(|source| {
                         FitError::Scene {
                             stage: format!("setting up the {}° cantilever", b.angle_deg),
                             source,
@@ -74,18 +77,18 @@ impl Fitter<'_> {
                     })?
                 }
             };
-            rig.set_material(&self.fitted.law, self.fitted.thickness)
+            rig.set_material(&m.law, m.thickness)
                 .map_err(|source| FitError::Scene {
                     stage: format!("setting up the {}° cantilever", b.angle_deg),
                     source,
                 })?;
-            rig.set_bending(self.fitted.bending);
+            rig.set_bending(m.bending);
             out.push(rig);
         }
         Ok(out)
     }
 
-    /// Puts the cantilevers of [`Fitter::bend_rigs`] back into the cache, warm.
+    /// Puts the cantilevers of [`Lab::bend_rigs`] back into the cache, warm.
     pub(super) fn keep_bend_rigs(
         &mut self,
         bends: &[BendTest],
@@ -94,12 +97,13 @@ impl Fitter<'_> {
     ) {
         let mesh_level = self.bend_level(level);
         for (b, rig) in bends.iter().zip(rigs) {
-            self.lab
-                .bend_cache
+            self.bend_cache
                 .insert(bend_key(b, bend_mesh(mesh_level, b)), rig);
         }
     }
+}
 
+impl Fitter<'_> {
     /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
     pub(super) fn thickness_stage(
         &mut self,
@@ -107,7 +111,7 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<(), FitError> {
         let t0 = Instant::now();
-        let mut rigs = self.bend_rigs(bends, level)?;
+        let mut rigs = self.lab.bend_rigs(&self.ctx, &self.fitted, bends, level)?;
         let (law0, tau0) = (self.fitted.law.clone(), self.fitted.thickness);
         let scaled = |q: &[f64]| {
             let tau = tau0 * q[0].exp();
@@ -187,7 +191,7 @@ impl Fitter<'_> {
             self.bend_angles.push(pt.drape_angle_deg);
             self.stats.record(Work::run(1, pt.report.iterations));
         }
-        self.keep_bend_rigs(bends, level, rigs);
+        self.lab.keep_bend_rigs(bends, level, rigs);
         self.fitted.law = law;
         // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
         if let super::map::A12Rule::Fixed(_) = self.ctx.a12 {
@@ -196,8 +200,8 @@ impl Fitter<'_> {
         self.fitted.thickness = tau;
         let msg = format!(
             "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
-            self.bend_level(level).0,
-            self.bend_level(level).1,
+            self.lab.bend_level(level).0,
+            self.lab.bend_level(level).1,
             tau * 1e3,
             100.0 * (rep.objective / bends.len() as f64).sqrt(),
             rep.evaluations,

@@ -28,9 +28,11 @@ impl Fitter<'_> {
         level: (usize, usize),
     ) -> Result<(f64, Vec<f64>), FitError> {
         let s = self.ctx.prep.curves[c].strip;
-        let node = self.predict(s, angle, level)?;
-        let model = self.curve_forces(c, &node);
-        Ok((self.curve_fit_error(c, &model), model))
+        let node = self
+            .lab
+            .predict(&self.ctx, &self.fitted, &mut self.stats, (s, angle, level))?;
+        let model = self.ctx.curve_forces(c, &node);
+        Ok((self.ctx.curve_fit_error(c, &model), model))
     }
 
     /// The misalignment Δθ ∈ [−m, m] (m = `max_misalign_deg`) that best explains curve `c`:
@@ -49,7 +51,9 @@ impl Fitter<'_> {
         let s = self.ctx.prep.curves[c].strip;
         // solve the grid's strips side by side; a failed one costs +∞ below
         let jobs: Vec<(usize, f64)> = grid.iter().map(|d| (s, angle + d)).collect();
-        let _ = self.predict_many(&jobs, level);
+        let _ = self
+            .lab
+            .predict_many(&self.ctx, &self.fitted, &mut self.stats, &jobs, level);
         let costs: Vec<f64> = grid
             .iter()
             .map(|&d| match self.curve_error(c, angle + d, level) {
@@ -89,7 +93,9 @@ impl Fitter<'_> {
         if jobs.is_empty() {
             return Ok(None);
         }
-        let nodes = self.predict_many(&jobs, level)?;
+        let nodes =
+            self.lab
+                .predict_many(&self.ctx, &self.fitted, &mut self.stats, &jobs, level)?;
         let material = self.fitted.material(self.ctx.data);
         let mut checks = Vec::new();
         for &(s, _) in &jobs {
@@ -105,13 +111,13 @@ impl Fitter<'_> {
             // its own is compared with itself, not with the ladder's mesh, and a node rig set
             // up on an earlier ladder level keeps that level's centre-rule β: either
             // difference is discretisation error, not interpolation error)
-            let own = self.strip_level(s, level);
-            let key = self.rig_key(s, strip.angle_deg, own);
-            let node_rig = self.lab.rigs.get(&key);
+            let own = self.lab.strip_level(s, level);
+            let key = self.ctx.rig_key(s, strip.angle_deg, own);
+            let node_rig = self.lab.warm_rig(&key);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
             t.grading = self.ctx.opts.grading;
-            t.yarn_rule = self.strip_yarns(strip.angle_deg);
-            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio, |r| r.yarn_ratio());
+            t.yarn_rule = self.lab.strip_yarns(self.ctx.opts, strip.angle_deg);
+            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio(), |r| r.yarn_ratio());
             t.solver.rtol = super::FIT_RTOL;
             t.solver.strategy = self.ctx.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
@@ -161,17 +167,21 @@ pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestO
     let jobs: Vec<(usize, f64)> = (0..f.ctx.prep.strips.len())
         .map(|s| (s, f.ctx.prep.strips[s].angle_deg))
         .collect();
-    f.predict_many(&jobs, last)?;
+    f.lab
+        .predict_many(&f.ctx, &f.fitted, &mut f.stats, &jobs, last)?;
     // each strip's discretisation error: the last level against one with half the faces
     // each way, at the slowest order measured on the cage (the 45° strip's clamped corners:
     // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
-    let order = f.mesh_order();
+    let order = super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted);
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
     f.journal.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",
         half.0, half.1
     ));
-    let coarse = f.predict_many(&jobs, half).ok();
+    let coarse = f
+        .lab
+        .predict_many(&f.ctx, &f.fitted, &mut f.stats, &jobs, half)
+        .ok();
     for c in 0..f.ctx.prep.curves.len() {
         tests.push(curve_outcome(f, c, last, coarse.as_deref(), order)?);
     }
@@ -195,9 +205,13 @@ fn curve_outcome(
     let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
     let (scale, scaled) = repeat_scale(f, &curve, &t.curve.display().to_string(), &model);
     let strip = &f.ctx.prep.strips[curve.strip];
-    let mesh = super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
+    let mesh = super::rigs::strip_mesh(
+        f.lab.strip_level(curve.strip, last),
+        strip.width,
+        strip.length,
+    );
     let mesh_error = coarse.map(|nodes| {
-        let rough = f.curve_forces(c, &nodes[curve.strip]);
+        let rough = f.ctx.curve_forces(c, &nodes[curve.strip]);
         super::refine::curve_mesh_error(&model, &rough, order)
     });
     if let Some(m) = mesh_error {
@@ -210,7 +224,7 @@ fn curve_outcome(
                 mesh.0,
                 mesh.1,
                 100.0 * err,
-                strip.refine,
+                f.lab.strip_refine[curve.strip],
                 super::refine::MAX_DOUBLINGS
             ));
         }
@@ -287,9 +301,9 @@ fn misalignment_check(
     f.journal
         .say(&format!("report: misalignment diagnostic of {name}"));
     // a diagnostic: on the first level's strips, whatever this one's own mesh
-    f.ladder_meshes = true;
+    f.lab.ladder_meshes = true;
     let found = f.misalignment(c, f.ctx.opts.ladder[0]);
-    f.ladder_meshes = false;
+    f.lab.ladder_meshes = false;
     if let Some(d) = found {
         let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
         misalign = Some(d);
@@ -328,7 +342,7 @@ fn interpolation_note(f: &mut Fitter) {
         worst.1,
         f.ctx.opts.ladder[0].0,
         f.ctx.opts.ladder[0].1,
-        if f.ctx.prep.strips.iter().any(|s| s.refine > 0) && !f.ladder_meshes {
+        if f.lab.strip_refine.iter().any(|&r| r > 0) && !f.lab.ladder_meshes {
             ", strips refined on their own meshes there"
         } else {
             ""
@@ -356,7 +370,7 @@ fn bend_outcomes(
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
             bend.yarn_rule = f.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
-            bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
+            bend.mesh = super::thickness::bend_mesh(f.lab.bend_level(last), b);
             let r = bend
                 .run(&f.fitted.material(f.ctx.data))
                 .map_err(|source| FitError::Scene {

@@ -24,7 +24,7 @@ impl Fitter<'_> {
                 "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
                 m.solved_on.0,
                 m.solved_on.1,
-                self.mesh_order(),
+                super::mesh_order(&self.lab, &self.ctx, &self.fitted),
                 m.mesh.0,
                 m.mesh.1
             )
@@ -32,7 +32,7 @@ impl Fitter<'_> {
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
-        let own = if self.ctx.prep.strips.iter().any(|s| s.refine > 0) {
+        let own = if self.lab.strip_refine.iter().any(|&r| r > 0) {
             " (and every strip refined on its own mesh once more)"
         } else {
             ""
