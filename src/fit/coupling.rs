@@ -37,6 +37,7 @@
 //! do not call for it (README, "Tension–shear coupling").
 
 use super::map::StageMap;
+use super::stages::{StageFit, StageRun};
 use super::{FitError, Fitter, StrainRange};
 use crate::material::{Law, ShearCoupling};
 
@@ -143,29 +144,29 @@ impl Fitter<'_> {
         })
     }
 
-    /// The coupling's trial on the first level (module doc); `err` and `range` are the
-    /// separable shear stage's shape error and strain range. Returns the stage's map for the
-    /// later levels (coupled if kept) and the shape error and range that stand.
+    /// The coupling's trial on the first level (module doc); `fit` is the separable shear
+    /// stage's. Returns the stage's map for the later levels (coupled if kept) and the strain
+    /// range that stands.
     pub(super) fn coupling_trial(
         &mut self,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
-        err: f64,
-        range: Option<StrainRange>,
-    ) -> Result<(StageMap, f64, Option<StrainRange>), FitError> {
+        fit: StageFit,
+    ) -> Result<(StageMap, Option<StrainRange>), FitError> {
+        let range = fit.range;
         let mode = self.ctx.opts.shear_coupling;
         let angles = distinct_angles(self, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
             self.fitted.coupling = CouplingOutcome::Off;
-            return Ok((map, err, range));
+            return Ok((map, range));
         }
         if mode == CouplingMode::Auto && angles < 2 {
             self.fitted.coupling = CouplingOutcome::NotTried;
             self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
-            return Ok((map, err, range));
+            return Ok((map, range));
         }
         let coupled = StageMap {
             coupling: true,
@@ -183,19 +184,19 @@ impl Fitter<'_> {
         self.journal
             .say("bias: refitting with the tension–shear coupling free");
         let without = StageErrors {
-            shape: err,
-            rms: self.stage_rms,
+            shape: fit.shape,
+            rms: fit.rms,
         };
-        self.screened = None;
         let screen = (mode == CouplingMode::Auto).then_some((without.shape, without.rms));
         let run = self.shell_stage(coupled, strips, level, true, super::StageMode::Full, screen);
         let gain = self.ctx.opts.degree_gain;
         let outcome = match run {
-            Ok(Some((shape, r))) => {
+            Ok(StageRun::Fitted(coupled_fit)) => {
                 let with = StageErrors {
-                    shape,
-                    rms: self.stage_rms,
+                    shape: coupled_fit.shape,
+                    rms: coupled_fit.rms,
                 };
+                let r = coupled_fit.range;
                 let pays = with.shape <= gain * without.shape
                     || (with.rms <= gain * without.rms && with.shape <= without.shape);
                 let why = if !self.convex_along(strips) {
@@ -213,9 +214,9 @@ impl Fitter<'_> {
                     Some(why) => Err(CouplingOutcome::Rejected { without, with, why }),
                 }
             }
-            Ok(None) => {
+            Ok(StageRun::GivenUp(screened)) => {
                 // screened out at its space-mapped start
-                let (shape, rms) = self.screened.unwrap_or((f64::NAN, f64::NAN));
+                let (shape, rms) = screened.unwrap_or((f64::NAN, f64::NAN));
                 Err(CouplingOutcome::Rejected {
                     without,
                     with: StageErrors { shape, rms },
@@ -242,7 +243,7 @@ impl Fitter<'_> {
                     level.0, level.1, c.warp, c.weft
                 ));
                 self.fitted.coupling = CouplingOutcome::Kept { without, with };
-                Ok((coupled, with.shape, r))
+                Ok((coupled, r))
             }
             Err(rejected) => {
                 if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
@@ -255,7 +256,7 @@ impl Fitter<'_> {
                 self.evidence.uncertainty.truncate(saved.1);
                 self.evidence.linearised.truncate(saved.2);
                 self.fitted.coupling = rejected;
-                Ok((map, err, range))
+                Ok((map, range))
             }
         }
     }

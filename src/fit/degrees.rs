@@ -21,7 +21,7 @@
 //! The better of the two (shape error) is judged; the other's records are dropped.
 
 use super::map::{var_to_beta, StageMap, BETA_MAX};
-use super::stages::StageMode;
+use super::stages::{StageFit, StageMode};
 use super::{FitError, Fitter, StrainRange};
 use crate::material::Orthotropic;
 
@@ -48,7 +48,7 @@ impl Fitter<'_> {
         strips: &[usize],
         level: (usize, usize),
         candidates: &[Vec<f64>],
-    ) -> Result<(f64, Option<StrainRange>), FitError> {
+    ) -> Result<StageFit, FitError> {
         let base = self.fitted.law.clone();
         let mut best: Option<Trial> = None;
         for (i, cand) in candidates.iter().enumerate() {
@@ -58,8 +58,10 @@ impl Fitter<'_> {
                     self.fitted.law = base.clone();
                     map.decode(cand, &mut self.fitted.law);
                     let run = self.shell_stage(map, strips, level, true, StageMode::Full, None)?;
-                    let (err, range) = run.expect("a stage that raises no degree always runs");
-                    (err, self.fitted.law.clone(), range, self.stage_rms)
+                    let fit = run
+                        .fitted()
+                        .expect("a stage that raises no degree always runs");
+                    (fit.shape, self.fitted.law.clone(), fit.range, fit.rms)
                 }
                 Some(prev) => match self.raise_degree(map, strips, level, cand, prev) {
                     Ok(Some(t)) => t,
@@ -125,10 +127,9 @@ impl Fitter<'_> {
                 break;
             }
         }
-        let (err, law, range, rms) = best.expect("one candidate at least");
+        let (shape, law, range, rms) = best.expect("one candidate at least");
         self.fitted.law = law;
-        self.stage_rms = rms;
-        Ok((err, range))
+        Ok(StageFit { shape, rms, range })
     }
 
     /// Degree d + 1 from degree d's trial `prev`: the mapped start, then, when that does not
@@ -206,7 +207,6 @@ impl Fitter<'_> {
             (Some(m), _) => {
                 self.evidence.uncertainty.truncate(between.0);
                 self.evidence.linearised.truncate(between.1);
-                self.stage_rms = m.3;
                 Some(m)
             }
             (None, d) => d,
@@ -229,7 +229,9 @@ impl Fitter<'_> {
         map.decode(&map.raise(from, beta), &mut law);
         self.fitted.law = law;
         let run = self.shell_stage(map, strips, level, true, mode, None)?;
-        Ok(run.map(|(err, range)| (err, self.fitted.law.clone(), range, self.stage_rms)))
+        Ok(run
+            .fitted()
+            .map(|fit| (fit.shape, self.fitted.law.clone(), fit.range, fit.rms)))
     }
 }
 

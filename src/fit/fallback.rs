@@ -14,15 +14,12 @@
 //! Each fallback taken is a note. When none solves, the error says what to try.
 
 use super::map::StageMap;
-use super::stages::StageMode;
-use super::{FitError, Fitter, StrainRange};
+use super::stages::{StageMode, StageRun};
+use super::{FitError, Fitter};
 use crate::material::Eta;
 
 /// What to try when a stage fails from every start, for the error message.
 const HINT: &str = "the stage failed from its start, from its law cut off where its stress stops rising and from a linear law; try `--max-degree 1`, `--strategy adaptive`, or `ks-fit check` on the dataset (units, toes, force_scale)";
-
-/// What a tensile stage returns: its shape error and strain range, `None` for a trial given up.
-type StageRun = Result<Option<(f64, Option<StrainRange>)>, FitError>;
 
 impl Fitter<'_> {
     /// One tensile stage on the shell model (see [`Fitter::shell_stage_once`]), falling back
@@ -37,7 +34,7 @@ impl Fitter<'_> {
         strain_range: bool,
         mode: StageMode,
         screen: Option<(f64, f64)>,
-    ) -> StageRun {
+    ) -> Result<StageRun, FitError> {
         let start = self.fitted.law.clone();
         let run = self.shell_stage_once(map, strips, level, strain_range, mode, screen);
         let falls_back = mode == StageMode::Full && screen.is_none() && !map.coupling;

@@ -192,17 +192,19 @@ fn fit_level(
             f.law_note(note);
             continue;
         }
-        let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+        let fit = if k == 2 && li == 0 && shear_candidates.len() > 1 {
             // the homogeneous strip models a clamped bias strip poorly: choose the shear
             // degree on the shell model itself
             f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
         } else {
             f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
+                .fitted()
                 .expect("a stage that raises no degree always runs")
         };
+        let mut range = fit.range;
         if k == 2 && li == 0 {
             // then, with the degree chosen, whether the tension–shear coupling pays
-            let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
+            let (map, r) = f.coupling_trial(maps[2], &strips[2], level, fit)?;
             maps[2] = map;
             range = r;
             super::joint::without_sweep_if_coupled(f, sets);

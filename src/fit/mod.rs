@@ -368,11 +368,6 @@ struct Fitter<'a> {
     evidence: Evidence,
     /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
     lab: rigs::Lab,
-    /// the rms relative error of the last tensile stage run (of the kept degree after a
-    /// degree ladder)
-    stage_rms: f64,
-    /// the shape and rms errors at a screened trial's mapped start, when it is given up there
-    screened: Option<(f64, f64)>,
 }
 
 impl Fitter<'_> {

@@ -192,8 +192,6 @@ impl<'a> Fitter<'a> {
             },
             bend_angles: Vec::new(),
             evidence: Default::default(),
-            stage_rms: f64::NAN,
-            screened: None,
         }
     }
 }

@@ -34,6 +34,34 @@ pub(super) enum StageMode {
     Stiffness,
 }
 
+/// A tensile stage fitted: its shape error, its rms relative error and, when asked, the
+/// strains its strips exercise at the fitted law.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct StageFit {
+    pub shape: f64,
+    pub rms: f64,
+    pub range: Option<StrainRange>,
+}
+
+/// How a tensile stage's run ends ([`Fitter::shell_stage`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) enum StageRun {
+    Fitted(StageFit),
+    /// a trial given up at its space-mapped start; a screened trial's shape and rms errors
+    /// there when the screen gave it up
+    GivenUp(Option<(f64, f64)>),
+}
+
+impl StageRun {
+    /// The fit, `None` for a trial given up.
+    pub(super) fn fitted(self) -> Option<StageFit> {
+        match self {
+            StageRun::Fitted(fit) => Some(fit),
+            StageRun::GivenUp(_) => None,
+        }
+    }
+}
+
 impl Fitter<'_> {
     /// Bootstrap fits of one direction from several starts on the homogeneous strip over the
     /// stage's curves, side by side (independent fits; the first start with the least mean
@@ -201,16 +229,18 @@ impl Fitter<'_> {
         strain_range: bool,
         mode: StageMode,
         screen: Option<(f64, f64)>,
-    ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
+    ) -> Result<StageRun, FitError> {
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         let t0 = Instant::now();
         let mut sp = self.stage_problem(map, strips, level)?;
         let mut p = self.unsaturated_start(map);
         let first_level = level == self.ctx.opts.ladder[0];
         let opts = self.ctx.stage_options(level, 1e-12, sp.ncurves);
-        if !self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)? {
+        if let Some(given_up) =
+            self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)?
+        {
             self.stats.time_stage(map.dir.name(), t0);
-            return Ok(None);
+            return Ok(given_up);
         }
         let stiffness_first = (first_level || stiffness_only) && !map.c_known;
         let (rep, dropped) = fit_stage(
@@ -246,8 +276,11 @@ impl Fitter<'_> {
             self.lab.keep_rig(key, rig);
         }
         self.stats.time_stage(map.dir.name(), t0);
-        self.stage_rms = err;
-        Ok(Some((shape, range)))
+        Ok(StageRun::Fitted(StageFit {
+            shape,
+            rms: err,
+            range,
+        }))
     }
 
     /// A tensile stage's problem: the rigs of its strips on a mesh level, set up for the
@@ -291,9 +324,9 @@ impl Fitter<'_> {
     }
 
     /// The stage's first evaluation and space-mapped start from p (see [`stage_start`]);
-    /// `false` when the trial is given up there (a raised degree whose mapped steps kept no
-    /// proposal, or a `screen`ed trial that gained too little), its work counted, its rigs
-    /// kept and its note logged.
+    /// the run's end when the trial is given up there (a raised degree whose mapped steps kept
+    /// no proposal, or a `screen`ed trial that gained too little), its work counted, its rigs
+    /// kept and its note logged; `None` when the stage goes on.
     fn mapped_stage_start(
         &mut self,
         sp: &mut StageProblem,
@@ -301,7 +334,7 @@ impl Fitter<'_> {
         mode: StageMode,
         rel_decrease: f64,
         screen: Option<(f64, f64)>,
-    ) -> Result<bool, FitError> {
+    ) -> Result<Option<StageRun>, FitError> {
         let (map, level) = (sp.map, sp.level);
         let fail = stage_failed(map, level);
         let first_level = level == self.ctx.opts.ladder[0];
@@ -327,29 +360,25 @@ impl Fitter<'_> {
         let note = mapped_note(map, p, level, &m);
         // a trial screened at its mapped start: given up unless the shape error has not
         // risen or the rms error already fell by the degree gain there
-        let screened_out = match screen {
+        let screened = match screen {
             Some(s) => {
                 let gain = self.ctx.opts.degree_gain;
-                let out = screen_trial(sp, &self.ctx.prep, p, m.after, s, gain).map_err(fail)?;
-                if out.is_some() {
-                    self.screened = out;
-                }
-                out.is_some()
+                screen_trial(sp, &self.ctx.prep, p, m.after, s, gain).map_err(fail)?
             }
-            None => false,
+            None => None,
         };
-        if (mode == StageMode::Raise && m.kept == 0) || screened_out {
+        if (mode == StageMode::Raise && m.kept == 0) || screened.is_some() {
             self.stats.record(sp.counts.work());
             self.log_degree(note);
             for (key, rig) in std::mem::take(&mut sp.rigs) {
                 self.lab.keep_rig(key, rig);
             }
-            return Ok(false);
+            return Ok(Some(StageRun::GivenUp(screened)));
         }
         if rounds > 0 {
             self.journal.degree(note);
         }
-        Ok(true)
+        Ok(None)
     }
 
     /// The stage's start from the current law, the tension–shear coupling moved back from a
