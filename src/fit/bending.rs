@@ -121,14 +121,14 @@ impl Fitter<'_> {
         self.stats.record(Work::single_solves(evals, newton));
         let b = rigidity.at(&p);
         self.bending_errors(b, off_axis, &seen, &p, level);
-        self.bend_angles.clear();
+        self.evidence.bend_angles.clear();
         for rig in &mut rigs {
             rig.set_bending(Some(b));
             let pt = rig.run(false).map_err(|source| FitError::Scene {
                 stage: "drape angles at the fitted rigidities".into(),
                 source,
             })?;
-            self.bend_angles.push(pt.drape_angle_deg);
+            self.evidence.bend_angles.push(pt.drape_angle_deg);
             self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.lab.keep_bend_rigs(bends, level, rigs);

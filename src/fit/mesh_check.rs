@@ -515,7 +515,7 @@ impl Fitter<'_> {
         factor: f64,
         changes: &[(String, f64, bool)],
     ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
-        let at_last = self.bend_angles.clone();
+        let at_last = self.evidence.bend_angles.clone();
         let fine = self.drape_angles(solved_on)?;
         let targets: Vec<f64> = self
             .ctx

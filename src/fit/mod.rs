@@ -307,6 +307,8 @@ struct Evidence {
     /// the refit change the ladder solves at its last level when it stops there (the finer
     /// level solved): the final mesh check, solved rather than estimated
     pub(super) ladder_check: Option<MeshCheck>,
+    /// drape angles of the bend tests at the last thickness or bending stage's result
+    pub(super) bend_angles: Vec<f64>,
 }
 
 /// The material being fitted: the stages' optima, applied in the order the stages run.
@@ -362,8 +364,6 @@ struct Fitter<'a> {
     stats: FitStats,
     /// the material being fitted
     fitted: Fitted,
-    /// drape angles of the bend tests at the last thickness or bending stage's result
-    bend_angles: Vec<f64>,
     /// what the stages leave for the standard errors and the mesh check
     evidence: Evidence,
     /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule

@@ -190,7 +190,6 @@ impl<'a> Fitter<'a> {
                 bending: None,
                 coupling: coupling::CouplingOutcome::Off,
             },
-            bend_angles: Vec::new(),
             evidence: Default::default(),
         }
     }

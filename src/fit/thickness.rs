@@ -179,7 +179,7 @@ impl Fitter<'_> {
             None => Vec::new(),
         };
         // the drape angles at the accepted thickness (warm: a Newton step or two)
-        self.bend_angles.clear();
+        self.evidence.bend_angles.clear();
         for rig in &mut rigs {
             let pt = rig
                 .set_material(&law, tau)
@@ -188,7 +188,7 @@ impl Fitter<'_> {
                     stage: "drape angles at the fitted thickness".into(),
                     source,
                 })?;
-            self.bend_angles.push(pt.drape_angle_deg);
+            self.evidence.bend_angles.push(pt.drape_angle_deg);
             self.stats.record(Work::run(1, pt.report.iterations));
         }
         self.lab.keep_bend_rigs(bends, level, rigs);

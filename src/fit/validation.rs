@@ -364,9 +364,9 @@ fn bend_outcomes(
     tests: &mut Vec<TestOutcome>,
 ) -> Result<(), FitError> {
     let data = f.ctx.data;
-    if f.bend_angles.len() != data.bend.len() {
+    if f.evidence.bend_angles.len() != data.bend.len() {
         // thickness known: the bends are predicted, not fitted
-        f.bend_angles.clear();
+        f.evidence.bend_angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
             bend.yarn_rule = f.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
@@ -377,11 +377,11 @@ fn bend_outcomes(
                     stage: format!("predicting the {}° cantilever", b.angle_deg),
                     source,
                 })?;
-            f.bend_angles.push(r.drape_angle_deg);
+            f.evidence.bend_angles.push(r.drape_angle_deg);
         }
     }
     let fitted = f.ctx.own_bending || data.known.thickness.is_none();
-    for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
+    for (b, &angle) in data.bend.iter().zip(&f.evidence.bend_angles) {
         tests.push(TestOutcome {
             kind: "bend",
             angle_deg: b.angle_deg,
