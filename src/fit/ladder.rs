@@ -63,12 +63,7 @@ pub(super) fn ladder(
                 f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
             }
         }
-        let data = f.ctx.data;
-        if f.ctx.own_bending {
-            f.bending_stage(&data.bend, level)?;
-        } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-            f.thickness_stage(&data.bend, level)?;
-        }
+        super::pipeline::bend_stage(f, level)?;
         if li + 1 < opts.ladder.len() {
             previous = Some(f.fitted_forces(&all, level)?);
         }

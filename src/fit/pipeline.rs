@@ -10,8 +10,8 @@ use super::measures::{self, Misfit, Objective};
 use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
-    bending, coupling, is_determined, joint, ladder, preprocess, refine, rigs, stages, uncertainty,
-    validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
+    bending, coupling, is_determined, joint, ladder, preprocess, refine, rigs, stages, thickness,
+    uncertainty, validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, Orthotropic};
@@ -248,13 +248,34 @@ fn shapes_then_bends(
     let known = &data.known;
     let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
     if shapes_fitted {
-        if f.ctx.own_bending {
-            f.bending_stage(&data.bend, last)?;
-        } else if !data.bend.is_empty() && known.thickness.is_none() {
-            f.thickness_stage(&data.bend, last)?;
-        }
+        bend_stage(f, last)?;
     }
     Ok(shapes_fitted)
+}
+
+/// The bend stage on a mesh level, where the bends fit anything: the bends' own rigidities
+/// (`--bending`), or the thickness unless it is known. Its optimum becomes the fitted
+/// material and its evidence the fit's.
+pub(super) fn bend_stage(f: &mut Fitter, level: (usize, usize)) -> Result<(), FitError> {
+    let t0 = Instant::now();
+    let data = f.ctx.data;
+    let (ctx, lab, stats, m) = (&f.ctx, &mut f.lab, &mut f.stats, &f.fitted);
+    let fit = if ctx.own_bending {
+        bending::bending_stage(ctx, lab, stats, m, level)?
+    } else if !data.bend.is_empty() && data.known.thickness.is_none() {
+        thickness::thickness_stage(ctx, lab, stats, m, level)?
+    } else {
+        return Ok(());
+    };
+    f.evidence.linearised.extend(fit.linearised);
+    f.evidence.stage_errors = fit.errors;
+    f.evidence.bend_angles = fit.angles;
+    f.fitted.law = fit.law;
+    f.fitted.thickness = fit.thickness;
+    f.fitted.bending = fit.bending;
+    f.journal.say(&fit.line);
+    f.stats.time_stage(fit.stage, t0);
+    Ok(())
 }
 
 /// The final standard errors and the mesh check; a check that fails refines the strips of the

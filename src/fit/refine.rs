@@ -333,12 +333,7 @@ fn double_and_refit(
         // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
         f.joint_stiffness(maps[k], k, sets, last)?;
     }
-    let data = f.ctx.data;
-    if f.ctx.own_bending {
-        f.bending_stage(&data.bend, last)?;
-    } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-        f.thickness_stage(&data.bend, last)?;
-    }
+    super::pipeline::bend_stage(f, last)?;
     Ok(())
 }
 

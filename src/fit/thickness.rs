@@ -2,13 +2,15 @@
 //! with a_ij and G12 scaled by τ⁰/τ so that the membrane stiffnesses a·τ, and so the tensile
 //! fits, are kept (the bending rigidity goes as a·τ³/12).
 
+use super::mesh_check::Linearised;
 use super::optim::{minimize, Evaluation};
 use super::rigs::Lab;
-use super::{to_evaluation, Context, FitError, Fitted, Fitter, Work};
+use super::uncertainty::ParamError;
+use super::{to_evaluation, Context, FitError, FitStats, Fitted, Work};
 use crate::dataset::BendTest;
+use crate::material::{BendingRigidity, Orthotropic};
 use crate::scene::{BendRig, CantileverBend, SceneError};
 use rayon::prelude::*;
-use std::time::Instant;
 
 /// A cantilever mesh at a ladder level: at 8 × 12, 4 across and elements along of an eighth
 /// of the width but at least 3.125 mm; both doubled per level. Elements twice as long (as the
@@ -103,112 +105,126 @@ impl Lab {
     }
 }
 
-impl Fitter<'_> {
-    /// Thickness from the bend tests, a_ij and G12 scaled by τ⁰/τ.
-    pub(super) fn thickness_stage(
-        &mut self,
-        bends: &[BendTest],
-        level: (usize, usize),
-    ) -> Result<(), FitError> {
-        let t0 = Instant::now();
-        let mut rigs = self.lab.bend_rigs(&self.ctx, &self.fitted, bends, level)?;
-        let (law0, tau0) = (self.fitted.law.clone(), self.fitted.thickness);
-        let scaled = |q: &[f64]| {
-            let tau = tau0 * q[0].exp();
-            let s = tau0 / tau;
-            let mut law = law0.clone();
-            law.a11 *= s;
-            law.a22 *= s;
-            law.a12 *= s;
-            law.g12 *= s;
-            (law, tau)
-        };
-        let mut p = vec![0.0];
-        let opts = self.ctx.stage_options(level, 1e-14, bends.len());
-        let (mut evals, mut newton) = (0, 0);
-        let mut seen = super::uncertainty::Seen::new();
-        let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
-            let (law, tau) = scaled(q);
-            let (mut r, mut j) = (Vec::new(), Vec::new());
-            // the cantilevers are independent: solved side by side, gathered in order
-            let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = rigs
-                .par_iter_mut()
-                .map(|rig| {
-                    rig.set_material(&law, tau)?;
-                    rig.run(jac)
-                })
-                .collect();
-            for (pt, b) in runs.into_iter().zip(bends) {
-                let pt = pt?;
-                evals += 1;
-                newton += pt.report.iterations;
-                r.push((pt.drape_angle_deg - b.drape_angle_deg) / b.drape_angle_deg);
-                if jac {
-                    // d/d ln τ = τ ∂/∂τ − Σ a ∂/∂a over a11, a22, a12, g12
-                    let d = &pt.dangle;
-                    let dtau = tau * d[d.len() - 1]
-                        - law.a11 * d[0]
-                        - law.a22 * d[1]
-                        - law.a12 * d[2]
-                        - law.g12 * d[3];
-                    j.push(vec![dtau / b.drape_angle_deg]);
-                }
+/// What a bend stage (the thickness, or the bends' own rigidities) found: the material at its
+/// optimum, the drape angles there, its evidence, and its line for the log.
+pub(super) struct BendFit {
+    pub law: Orthotropic,
+    pub thickness: f64,
+    pub bending: Option<BendingRigidity>,
+    /// the bend tests' drape angles at the optimum
+    pub angles: Vec<f64>,
+    /// the stage's linearisation at the optimum, for the mesh check
+    pub linearised: Option<Linearised>,
+    /// the standard errors of what it fitted
+    pub errors: Vec<ParamError>,
+    /// its progress line, and its name for the timings
+    pub line: String,
+    pub stage: &'static str,
+}
+
+/// Thickness from the bend tests, from material `m`: a_ij and G12 scaled by τ⁰/τ.
+pub(super) fn thickness_stage(
+    ctx: &Context,
+    lab: &mut Lab,
+    stats: &mut FitStats,
+    m: &Fitted,
+    level: (usize, usize),
+) -> Result<BendFit, FitError> {
+    let bends = &ctx.data.bend;
+    let mut rigs = lab.bend_rigs(ctx, m, bends, level)?;
+    let (law0, tau0) = (m.law.clone(), m.thickness);
+    let scaled = |q: &[f64]| {
+        let tau = tau0 * q[0].exp();
+        let s = tau0 / tau;
+        let mut law = law0.clone();
+        law.a11 *= s;
+        law.a22 *= s;
+        law.a12 *= s;
+        law.g12 *= s;
+        (law, tau)
+    };
+    let mut p = vec![0.0];
+    let opts = ctx.stage_options(level, 1e-14, bends.len());
+    let (mut evals, mut newton) = (0, 0);
+    let mut seen = super::uncertainty::Seen::new();
+    let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
+        let (law, tau) = scaled(q);
+        let (mut r, mut j) = (Vec::new(), Vec::new());
+        // the cantilevers are independent: solved side by side, gathered in order
+        let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = rigs
+            .par_iter_mut()
+            .map(|rig| {
+                rig.set_material(&law, tau)?;
+                rig.run(jac)
+            })
+            .collect();
+        for (pt, b) in runs.into_iter().zip(bends) {
+            let pt = pt?;
+            evals += 1;
+            newton += pt.report.iterations;
+            r.push((pt.drape_angle_deg - b.drape_angle_deg) / b.drape_angle_deg);
+            if jac {
+                // d/d ln τ = τ ∂/∂τ − Σ a ∂/∂a over a11, a22, a12, g12
+                let d = &pt.dangle;
+                let dtau = tau * d[d.len() - 1]
+                    - law.a11 * d[0]
+                    - law.a22 * d[1]
+                    - law.a12 * d[2]
+                    - law.g12 * d[3];
+                j.push(vec![dtau / b.drape_angle_deg]);
             }
-            let e = to_evaluation(r, j, 1, jac);
-            seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
-            Ok(e)
-        };
-        let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
-            stage: format!("thickness stage on {}×{}", level.0, level.1),
-            source,
-        })?;
-        self.stats.record(Work::single_solves(evals, newton));
-        let (law, tau) = scaled(&p);
-        if let Some((_, j)) = super::uncertainty::at_optimum(&seen, &p) {
-            self.evidence
-                .linearised
-                .push(super::mesh_check::Linearised::bends(
-                    level,
-                    j,
-                    &["thickness_mm"],
-                    &[tau * 1e3],
-                ));
         }
-        self.evidence.stage_errors = match super::uncertainty::at_optimum(&seen, &p) {
-            Some((r, j)) => super::uncertainty::log_errors(&["thickness_mm"], &[tau * 1e3], j, r),
-            None => Vec::new(),
-        };
-        // the drape angles at the accepted thickness (warm: a Newton step or two)
-        self.evidence.bend_angles.clear();
-        for rig in &mut rigs {
-            let pt = rig
-                .set_material(&law, tau)
-                .and_then(|_| rig.run(false))
-                .map_err(|source| FitError::Scene {
-                    stage: "drape angles at the fitted thickness".into(),
-                    source,
-                })?;
-            self.evidence.bend_angles.push(pt.drape_angle_deg);
-            self.stats.record(Work::run(1, pt.report.iterations));
-        }
-        self.lab.keep_bend_rigs(bends, level, rigs);
-        self.fitted.law = law;
-        // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
-        if let super::map::A12Rule::Fixed(_) = self.ctx.a12 {
-            self.ctx.a12.apply(&mut self.fitted.law);
-        }
-        self.fitted.thickness = tau;
-        let msg = format!(
-            "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
-            self.lab.bend_level(level).0,
-            self.lab.bend_level(level).1,
-            tau * 1e3,
-            100.0 * (rep.objective / bends.len() as f64).sqrt(),
-            rep.evaluations,
-            rep.stop
-        );
-        self.journal.say(&msg);
-        self.stats.time_stage("thickness", t0);
-        Ok(())
+        let e = to_evaluation(r, j, 1, jac);
+        seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
+        Ok(e)
+    };
+    let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
+        stage: format!("thickness stage on {}×{}", level.0, level.1),
+        source,
+    })?;
+    stats.record(Work::single_solves(evals, newton));
+    let (mut law, tau) = scaled(&p);
+    let linearised = super::uncertainty::at_optimum(&seen, &p)
+        .map(|(_, j)| Linearised::bends(level, j, &["thickness_mm"], &[tau * 1e3]));
+    let errors = match super::uncertainty::at_optimum(&seen, &p) {
+        Some((r, j)) => super::uncertainty::log_errors(&["thickness_mm"], &[tau * 1e3], j, r),
+        None => Vec::new(),
+    };
+    // the drape angles at the accepted thickness (warm: a Newton step or two)
+    let mut angles = Vec::new();
+    for rig in &mut rigs {
+        let pt = rig
+            .set_material(&law, tau)
+            .and_then(|_| rig.run(false))
+            .map_err(|source| FitError::Scene {
+                stage: "drape angles at the fitted thickness".into(),
+                source,
+            })?;
+        angles.push(pt.drape_angle_deg);
+        stats.record(Work::run(1, pt.report.iterations));
     }
+    lab.keep_bend_rigs(bends, level, rigs);
+    // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
+    if let super::map::A12Rule::Fixed(_) = ctx.a12 {
+        ctx.a12.apply(&mut law);
+    }
+    let line = format!(
+        "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
+        lab.bend_level(level).0,
+        lab.bend_level(level).1,
+        tau * 1e3,
+        100.0 * (rep.objective / bends.len() as f64).sqrt(),
+        rep.evaluations,
+        rep.stop
+    );
+    Ok(BendFit {
+        law,
+        thickness: tau,
+        bending: m.bending,
+        angles,
+        linearised,
+        errors,
+        line,
+        stage: "thickness",
+    })
 }
