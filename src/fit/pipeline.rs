@@ -246,11 +246,15 @@ fn shapes_then_bends(
 ) -> Result<bool, FitError> {
     let data = f.ctx.data;
     let known = &data.known;
-    let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
-    if shapes_fitted {
-        bend_stage(f, last)?;
-    }
-    Ok(shapes_fitted)
+    let g12 = if strips[2].is_empty() && known.g12.is_none() {
+        super::shapes::shapes_stage(&f.ctx, &mut f.journal, &mut f.stats, &f.fitted)?
+    } else {
+        None
+    };
+    let Some(g12) = g12 else { return Ok(false) };
+    f.fitted.law.g12 = g12;
+    bend_stage(f, last)?;
+    Ok(true)
 }
 
 /// The bend stage on a mesh level, where the bends fit anything: the bends' own rigidities
