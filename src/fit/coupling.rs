@@ -238,7 +238,7 @@ impl Fitter<'_> {
         match outcome {
             Ok((with, r)) => {
                 let c = self.fitted.law.coupling.expect("the coupled stage sets κ");
-                self.log_degree(format!(
+                self.journal.log_degree(format!(
                     "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
                     level.0, level.1, c.warp, c.weft
                 ));
@@ -247,7 +247,7 @@ impl Fitter<'_> {
             }
             Err(rejected) => {
                 if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
-                    self.log_degree(format!(
+                    self.journal.log_degree(format!(
                         "bias: tension–shear coupling not kept on {}×{}: {why} ({without} -> {with})",
                         level.0, level.1
                     ));

@@ -66,7 +66,7 @@ impl Fitter<'_> {
                 Some(prev) => match self.raise_degree(map, strips, level, cand, prev) {
                     Ok(Some(t)) => t,
                     Ok(None) => {
-                        self.log_degree(format!(
+                        self.journal.log_degree(format!(
                             "{}: degree {} kept: neither start of degree {degree} found a better law",
                             map.dir.name(),
                             degree - 1
@@ -74,7 +74,7 @@ impl Fitter<'_> {
                         break;
                     }
                     Err(e) => {
-                        self.log_degree(format!(
+                        self.journal.log_degree(format!(
                             "{}: degree {degree} failed on the shell ({e}); degree {} kept",
                             map.dir.name(),
                             degree - 1
@@ -108,7 +108,7 @@ impl Fitter<'_> {
                         })
                 });
                 if let Some(why) = why {
-                    self.log_degree(format!(
+                    self.journal.log_degree(format!(
                         "{}: degree {} kept: degree {degree} {why}",
                         map.dir.name(),
                         degree - 1

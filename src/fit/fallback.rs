@@ -48,7 +48,7 @@ impl Fitter<'_> {
             let mut changed = false;
             for m in &maps {
                 let note = super::plausible::cut_before_fall(&mut self.fitted.law, *m);
-                changed |= self.law_note(note);
+                changed |= self.journal.law_note(note);
             }
             if linear && map.eta(&self.fitted.law) != &Eta::linear() {
                 *map.eta_mut(&mut self.fitted.law) = Eta::linear();

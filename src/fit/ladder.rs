@@ -184,7 +184,7 @@ fn fit_level(
             // strips; η's shape stays the first level's (the mesh check measures it)
             f.joint_stiffness(maps[k], k, sets, level)?;
             let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
-            f.law_note(note);
+            f.journal.law_note(note);
             continue;
         }
         let fit = if k == 2 && li == 0 && shear_candidates.len() > 1 {
@@ -209,7 +209,7 @@ fn fit_level(
             set_cutoff(f, k, lo, hi);
         }
         let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
-        f.law_note(note);
+        f.journal.law_note(note);
     }
     Ok(())
 }

@@ -371,14 +371,6 @@ struct Fitter<'a> {
 }
 
 impl Fitter<'_> {
-    /// Says and notes a change a rule made to the law (`None`: no change); whether it did.
-    fn law_note(&mut self, note: Option<String>) -> bool {
-        let Some(note) = note else { return false };
-        self.journal.say(&note);
-        self.journal.note(note);
-        true
-    }
-
     /// Every fitted parameter's standard error: each tensile stage's last run at the law's
     /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
     /// or bending stage's.

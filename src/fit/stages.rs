@@ -118,7 +118,7 @@ impl Fitter<'_> {
             return (map.encode(&self.fitted.law), Vec::new());
         };
         let mut all = vec![chosen.0.clone()];
-        self.log_degree(format!(
+        self.journal.log_degree(format!(
             "{}: degree 1, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
             map.dir.name(),
             100.0 * chosen.1,
@@ -155,7 +155,7 @@ impl Fitter<'_> {
                 let why = super::plausible::implausible(&self.fitted.law, map, None);
                 self.fitted.law = saved;
                 if let Some(why) = why {
-                    self.log_degree(format!(
+                    self.journal.log_degree(format!(
                         "{}: degree {} kept: degree {degree} {why} (homogeneous strip)",
                         map.dir.name(),
                         degree - 1
@@ -163,7 +163,7 @@ impl Fitter<'_> {
                     break;
                 }
             }
-            self.log_degree(format!(
+            self.journal.log_degree(format!(
                 "{}: degree {degree}, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
                 map.dir.name(),
                 100.0 * candidate.1,
@@ -172,7 +172,7 @@ impl Fitter<'_> {
             all.push(candidate.0.clone());
             let gains = fixed.is_some() || candidate.2 <= self.ctx.opts.degree_gain * chosen.2;
             if gains && fixed.is_none() && self.yarn_law_falls(map, &candidate.0) {
-                self.log_degree(format!(
+                self.journal.log_degree(format!(
                     "{}: degree {} kept: degree {degree} has a negative weight on its stiffest term, so its stress falls just past the tested strain (homogeneous strip)",
                     map.dir.name(),
                     degree - 1
@@ -203,11 +203,6 @@ impl Fitter<'_> {
         let mut law = self.fitted.law.clone();
         map.decode(p, &mut law);
         map.dir != Direction::Shear && super::plausible::falls_eventually(map.eta(&law))
-    }
-
-    pub(super) fn log_degree(&mut self, line: String) {
-        self.journal.say(&line);
-        self.journal.degree(line);
     }
 
     /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
@@ -259,7 +254,7 @@ impl Fitter<'_> {
         let msg = self.stage_line(&sp, &p, (err, shape), &rep);
         self.journal.say(&msg);
         if dropped > 0 {
-            self.log_degree(format!(
+            self.journal.log_degree(format!(
                 "{}: {dropped} term(s) dropped on {}×{}: under {:.1} % of η' over the tested range",
                 map.dir.name(),
                 level.0,
@@ -369,7 +364,7 @@ impl Fitter<'_> {
         };
         if (mode == StageMode::Raise && m.kept == 0) || screened.is_some() {
             self.stats.record(sp.counts.work());
-            self.log_degree(note);
+            self.journal.log_degree(note);
             for (key, rig) in std::mem::take(&mut sp.rigs) {
                 self.lab.keep_rig(key, rig);
             }
@@ -583,7 +578,7 @@ pub(super) fn bootstrap_all(
     // bootstrap kept whatever it does, a softening degree 1) is cut off below that
     for map in &maps[..2] {
         let note = super::plausible::cut_before_fall(&mut f.fitted.law, *map);
-        f.law_note(note);
+        f.journal.law_note(note);
     }
     f.ctx.a12.apply(&mut f.fitted.law);
     // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
