@@ -31,7 +31,15 @@ pub fn fit(
     let strips = fitted_strips(&f);
     let mut maps = stage_maps(&f, &strips);
     require_yarn_data(&f, &strips)?;
-    let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
+    let (law, shear_candidates) = stages::bootstrap_all(
+        &f.ctx,
+        &mut f.journal,
+        &mut f.stats,
+        &f.fitted,
+        &maps,
+        &strips,
+    );
+    f.fitted.law = law;
     if let Some(note) = f.lab.decide_yarns(opts, &f.fitted.law) {
         f.journal.note(note);
     }

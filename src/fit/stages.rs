@@ -2,16 +2,18 @@
 //! tensile stages on the shell model (the thickness stage is in `thickness.rs`, the ladder of
 //! meshes in `ladder.rs`).
 
+mod homogeneous;
 mod problem;
 
-use super::map::{beta_to_var, Direction, StageMap};
+pub(super) use homogeneous::bootstrap_all;
+
+use super::map::StageMap;
 use super::optim::OptimReport;
-use super::surrogate::{homogeneous_fit, MappedStart};
+use super::surrogate::MappedStart;
 use super::uncertainty::Seen;
 use super::{FitError, Fitter, RigKey, StrainRange, Work};
 use crate::scene::{SceneError, StripRig};
 use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
-use rayon::prelude::*;
 use std::time::Instant;
 
 /// What a tensile stage fits ([`Fitter::shell_stage`]).
@@ -63,148 +65,6 @@ impl StageRun {
 }
 
 impl Fitter<'_> {
-    /// Bootstrap fits of one direction from several starts on the homogeneous strip over the
-    /// stage's curves, side by side (independent fits; the first start with the least mean
-    /// relative error wins, as one after another): (p, mean relative error, shape error).
-    fn bootstrap_best(
-        &mut self,
-        map: StageMap,
-        curves: &[usize],
-        starts: Vec<Vec<f64>>,
-    ) -> Option<(Vec<f64>, f64, f64)> {
-        let (prep, law, tau) = (&self.ctx.prep, &self.fitted.law, self.fitted.thickness);
-        let fits: Vec<_> = starts
-            .into_par_iter()
-            .map(|p0| homogeneous_fit(prep, law, tau, map, curves, p0, None))
-            .collect();
-        let mut best: Option<(Vec<f64>, f64, f64)> = None;
-        for fit in fits.into_iter().flatten() {
-            self.stats.record(Work::bootstrap(fit.evaluations));
-            if best.as_ref().is_none_or(|b| fit.error < b.1) {
-                best = Some((fit.p, fit.error, fit.shape));
-            }
-        }
-        best
-    }
-
-    /// Degree choice and initial guess of one direction on the homogeneous strip. Degree
-    /// d + 1 starts from degree d's optimum (among other starts), so it never ends worse.
-    /// Returns the chosen degree's variables and every degree's fit (index d − 1).
-    fn bootstrap(&mut self, map: StageMap, curves: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
-        // secant stiffness of the first curve as the start of degree 1
-        let c0 = {
-            let curve = &self.ctx.prep.curves[curves[0]];
-            let s = &self.ctx.prep.strips[curve.strip];
-            let (dl, f) = *curve.points.last().expect("a curve with points");
-            let lambda = 1.0 + dl / s.length;
-            let secant =
-                f / (s.width * self.fitted.thickness * lambda * super::green(dl, s.length));
-            match map.dir {
-                Direction::Shear => 0.25 * secant,
-                _ => secant,
-            }
-        };
-        let starts = [1e-3, 1.0, 5.0]
-            .iter()
-            .map(|&beta| {
-                if map.c_known {
-                    vec![beta_to_var(beta)]
-                } else {
-                    vec![c0.ln(), beta_to_var(beta)]
-                }
-            })
-            .collect();
-        let Some(mut chosen) = self.bootstrap_best(map, curves, starts) else {
-            return (map.encode(&self.fitted.law), Vec::new());
-        };
-        let mut all = vec![chosen.0.clone()];
-        self.journal.log_degree(format!(
-            "{}: degree 1, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
-            map.dir.name(),
-            100.0 * chosen.1,
-            100.0 * chosen.2
-        ));
-        let fixed = self.ctx.opts.fixed_degree;
-        for degree in 2..=fixed.unwrap_or(self.ctx.opts.max_degree) {
-            if fixed.is_none() && chosen.2 <= self.ctx.opts.degree_good {
-                self.journal.degree(format!(
-                    "{}: degree {} kept: error below {:.2} %",
-                    map.dir.name(),
-                    degree - 1,
-                    100.0 * self.ctx.opts.degree_good
-                ));
-                break;
-            }
-            let prev = all.last().expect("degree 1").clone();
-            let mut starts = Vec::new();
-            for mu_new in [0.0, 0.3, -0.3, 0.7] {
-                for beta_new in [0.5, 2.0, 4.0, 5.5] {
-                    let mut p = map.raise(&prev, beta_new);
-                    let o = usize::from(!map.c_known);
-                    p[o + degree - 2] = mu_new;
-                    starts.push(p);
-                }
-            }
-            let Some(candidate) = self.bootstrap_best(map, curves, starts) else {
-                break;
-            };
-            if fixed.is_none() {
-                let mut law = self.fitted.law.clone();
-                map.decode(&candidate.0, &mut law);
-                let saved = std::mem::replace(&mut self.fitted.law, law);
-                let why = super::plausible::implausible(&self.fitted.law, map, None);
-                self.fitted.law = saved;
-                if let Some(why) = why {
-                    self.journal.log_degree(format!(
-                        "{}: degree {} kept: degree {degree} {why} (homogeneous strip)",
-                        map.dir.name(),
-                        degree - 1
-                    ));
-                    break;
-                }
-            }
-            self.journal.log_degree(format!(
-                "{}: degree {degree}, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
-                map.dir.name(),
-                100.0 * candidate.1,
-                100.0 * candidate.2
-            ));
-            all.push(candidate.0.clone());
-            let gains = fixed.is_some() || candidate.2 <= self.ctx.opts.degree_gain * chosen.2;
-            if gains && fixed.is_none() && self.yarn_law_falls(map, &candidate.0) {
-                self.journal.log_degree(format!(
-                    "{}: degree {} kept: degree {degree} has a negative weight on its stiffest term, so its stress falls just past the tested strain (homogeneous strip)",
-                    map.dir.name(),
-                    degree - 1
-                ));
-                break;
-            }
-            if gains {
-                chosen = candidate;
-            } else {
-                self.journal.degree(format!(
-                    "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
-                    map.dir.name(),
-                    degree - 1,
-                    100.0 * (1.0 - self.ctx.opts.degree_gain)
-                ));
-                break;
-            }
-        }
-        (chosen.0, all)
-    }
-
-    /// Whether the yarn law of `map` at the bootstrap's variables p falls eventually
-    /// ([`super::plausible::falls_eventually`]): its stress then falls a little past the
-    /// tested strain, where the shell's strips reach at the jaws' corners, and their solves
-    /// fail. The shear's degree is chosen again on the shell ([`super::degrees`]), where such
-    /// a raise that fails to solve keeps the lower degree.
-    fn yarn_law_falls(&self, map: StageMap, p: &[f64]) -> bool {
-        let mut law = self.fitted.law.clone();
-        map.decode(p, &mut law);
-        map.dir != Direction::Shear && super::plausible::falls_eventually(map.eta(&law))
-    }
-
     /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
     /// the current law alone (`shell_stage` falls back from it, see [`super::fallback`]);
     /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
@@ -533,84 +393,6 @@ impl Fitter<'_> {
         }
         Ok(out)
     }
-}
-
-/// Bootstrap: degrees and initial guesses from the homogeneous strip, for every direction
-/// with fitted strips; defaults (with notes) for the others.
-pub(super) fn bootstrap_all(
-    f: &mut Fitter,
-    maps: &[StageMap],
-    strips: &[Vec<usize>],
-) -> Vec<Vec<f64>> {
-    let t0 = Instant::now();
-    f.journal.say("bootstrap on the homogeneous-strain strip");
-    let mut shear_candidates = Vec::new();
-    for k in 0..2 {
-        let curves = f.ctx.used_curves(&strips[k]);
-        if !curves.is_empty() {
-            let (q, _) = f.bootstrap(maps[k], &curves);
-            let mut law = f.fitted.law.clone();
-            maps[k].decode(&q, &mut law);
-            f.fitted.law = law;
-        }
-    }
-    let known = &f.ctx.data.known;
-    match (strips[0].is_empty(), strips[1].is_empty()) {
-        (true, false) if known.a11.is_none() => {
-            f.fitted.law.a11 = f.fitted.law.a22;
-            f.fitted.law.warp = f.fitted.law.weft.clone();
-            f.journal
-                .note("warp not fitted (no 90° test): taken equal to the weft".into());
-        }
-        (false, true) if known.a22.is_none() => {
-            f.fitted.law.a22 = f.fitted.law.a11;
-            f.fitted.law.weft = f.fitted.law.warp.clone();
-            f.journal
-                .note("weft not fitted (no 0° test): taken equal to the warp".into());
-        }
-        (true, true) => f.journal.note(
-            "warp and weft not fitted (no 0° or 90° test): a11 and a22 as given in [known], linear"
-                .into(),
-        ),
-        _ => {}
-    }
-    // a yarn law whose stress stops rising a little past the tests (a `--degree` the
-    // bootstrap kept whatever it does, a softening degree 1) is cut off below that
-    for map in &maps[..2] {
-        let note = super::plausible::cut_before_fall(&mut f.fitted.law, *map);
-        f.journal.law_note(note);
-    }
-    f.ctx.a12.apply(&mut f.fitted.law);
-    // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
-    // the two agree best) it misjudges the strip badly (a shape error of 12–18 % over 22.5°,
-    // 45° and 67.5° on the bundled fabrics, with starts the shell could not solve), so the
-    // shear is bootstrapped on the strips closest to 45° only; the shell stages use them all
-    let nearest = strips[2]
-        .iter()
-        .map(|&s| (f.ctx.prep.strips[s].angle_deg - 45.0).abs())
-        .fold(f64::INFINITY, f64::min);
-    let bias: Vec<usize> = strips[2]
-        .iter()
-        .copied()
-        .filter(|&s| (f.ctx.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
-        .collect();
-    let shear = f.ctx.used_curves(&bias);
-    if !shear.is_empty() {
-        let (q, all) = f.bootstrap(maps[2], &shear);
-        let mut law = f.fitted.law.clone();
-        maps[2].decode(&q, &mut law);
-        f.fitted.law = law;
-        shear_candidates = all;
-    } else if f.ctx.data.known.g12.is_none() {
-        f.fitted.law.g12 = 0.02 * f.fitted.law.a11.min(f.fitted.law.a22);
-        let g12 = f.fitted.law.g12;
-        f.journal.note(format!(
-            "{}: linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa",
-            super::shapes::SHEAR_ASSUMED
-        ));
-    }
-    f.stats.time_stage("bootstrap", t0);
-    shear_candidates
 }
 
 /// The log line of a stage's space-mapped start `m` at p.
