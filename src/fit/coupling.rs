@@ -37,9 +37,9 @@
 //! do not call for it (README, "Tension–shear coupling").
 
 use super::map::StageMap;
-use super::stages::{StageFit, StageRun};
-use super::{FitError, Fitter, StrainRange};
-use crate::material::{Law, ShearCoupling};
+use super::stages::{StageFit, StageMode, StageRun};
+use super::{FitError, Fitted, Fitter};
+use crate::material::{Law, Orthotropic, ShearCoupling};
 
 /// `fit --shear-coupling`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -116,15 +116,15 @@ fn distinct_angles(f: &Fitter, strips: &[usize]) -> usize {
 }
 
 impl Fitter<'_> {
-    /// Whether the law's tangent is positive definite along every strip's homogeneous strain
+    /// Whether `law`'s tangent is positive definite along every strip's homogeneous strain
     /// path to twice its largest elongation (20 points each; module doc).
-    fn convex_along(&self, strips: &[usize]) -> bool {
+    fn convex_along(&self, law: &Orthotropic, strips: &[usize]) -> bool {
         strips.iter().all(|&s| {
             let st = &self.ctx.prep.strips[s];
             let top = 2.0 * st.nodes.last().copied().unwrap_or(0.0);
             let dl: Vec<f64> = (1..=20).map(|i| top * i as f64 / 20.0).collect();
             let path = super::bootstrap::homogeneous_curve(
-                &self.fitted.law,
+                law,
                 st.angle_deg,
                 st.width,
                 st.length,
@@ -135,9 +135,7 @@ impl Fitter<'_> {
             path.is_ok_and(|pts| {
                 pts.iter().all(|p| {
                     let e = nalgebra::Vector3::from(p.strain);
-                    self.fitted
-                        .law
-                        .response(&e)
+                    law.response(&e)
                         .is_ok_and(|r| r.tangent.cholesky().is_some())
                 })
             })
@@ -145,50 +143,60 @@ impl Fitter<'_> {
     }
 
     /// The coupling's trial on the first level (module doc); `fit` is the separable shear
-    /// stage's. Returns the stage's map for the later levels (coupled if kept) and the strain
-    /// range that stands.
+    /// stage's, applied to the fitted material. Returns the stage's map for the later levels
+    /// (coupled if kept) and the fit that stands.
     pub(super) fn coupling_trial(
         &mut self,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         fit: StageFit,
-    ) -> Result<(StageMap, Option<StrainRange>), FitError> {
+    ) -> Result<(StageMap, StageFit), FitError> {
         let range = fit.range;
         let mode = self.ctx.opts.shear_coupling;
         let angles = distinct_angles(self, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
             self.fitted.coupling = CouplingOutcome::Off;
-            return Ok((map, range));
+            return Ok((map, fit));
         }
         if mode == CouplingMode::Auto && angles < 2 {
             self.fitted.coupling = CouplingOutcome::NotTried;
             self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
-            return Ok((map, range));
+            return Ok((map, fit));
         }
         let coupled = StageMap {
             coupling: true,
             ..map
         };
         let saved = (
-            self.fitted.law.clone(),
             self.evidence.uncertainty.len(),
             self.evidence.linearised.len(),
         );
-        self.fitted.law.coupling = Some(ShearCoupling {
+        let mut law = fit.law.clone();
+        law.coupling = Some(ShearCoupling {
             warp: 0.0,
             weft: 0.0,
         });
+        let from = Fitted {
+            law,
+            ..self.fitted.clone()
+        };
         self.journal
             .say("bias: refitting with the tension–shear coupling free");
         let without = StageErrors {
             shape: fit.shape,
             rms: fit.rms,
         };
-        let screen = (mode == CouplingMode::Auto).then_some((without.shape, without.rms));
-        let run = self.shell_stage(coupled, strips, level, true, super::StageMode::Full, screen);
+        let stage_mode = match mode {
+            CouplingMode::Auto => StageMode::Screened {
+                shape: without.shape,
+                rms: without.rms,
+            },
+            _ => StageMode::Full,
+        };
+        let run = self.shell_stage(&from, coupled, strips, level, true, stage_mode);
         let gain = self.ctx.opts.degree_gain;
         let outcome = match run {
             Ok(StageRun::Fitted(coupled_fit)) => {
@@ -196,10 +204,10 @@ impl Fitter<'_> {
                     shape: coupled_fit.shape,
                     rms: coupled_fit.rms,
                 };
-                let r = coupled_fit.range;
+
                 let pays = with.shape <= gain * without.shape
                     || (with.rms <= gain * without.rms && with.shape <= without.shape);
-                let why = if !self.convex_along(strips) {
+                let why = if !self.convex_along(&coupled_fit.law, strips) {
                     Some("the coupled law's tangent is not positive definite along the strips' strain paths (to twice the tested elongation)".to_string())
                 } else if mode == CouplingMode::Auto && !pays {
                     Some(format!(
@@ -210,7 +218,13 @@ impl Fitter<'_> {
                     None
                 };
                 match why {
-                    None => Ok((with, r.or(range))),
+                    None => Ok((
+                        with,
+                        StageFit {
+                            range: coupled_fit.range.or(range),
+                            ..*coupled_fit
+                        },
+                    )),
                     Some(why) => Err(CouplingOutcome::Rejected { without, with, why }),
                 }
             }
@@ -236,14 +250,14 @@ impl Fitter<'_> {
             }),
         };
         match outcome {
-            Ok((with, r)) => {
-                let c = self.fitted.law.coupling.expect("the coupled stage sets κ");
+            Ok((with, stands)) => {
+                let c = stands.law.coupling.expect("the coupled stage sets κ");
                 self.journal.log_degree(format!(
                     "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
                     level.0, level.1, c.warp, c.weft
                 ));
                 self.fitted.coupling = CouplingOutcome::Kept { without, with };
-                Ok((coupled, r))
+                Ok((coupled, stands))
             }
             Err(rejected) => {
                 if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
@@ -252,11 +266,10 @@ impl Fitter<'_> {
                         level.0, level.1
                     ));
                 }
-                self.fitted.law = saved.0;
-                self.evidence.uncertainty.truncate(saved.1);
-                self.evidence.linearised.truncate(saved.2);
+                self.evidence.uncertainty.truncate(saved.0);
+                self.evidence.linearised.truncate(saved.1);
                 self.fitted.coupling = rejected;
-                Ok((map, range))
+                Ok((map, fit))
             }
         }
     }

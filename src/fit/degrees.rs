@@ -22,11 +22,10 @@
 
 use super::map::{var_to_beta, StageMap, BETA_MAX};
 use super::stages::{StageFit, StageMode};
-use super::{FitError, Fitter, StrainRange};
-use crate::material::Orthotropic;
+use super::{FitError, Fitted, Fitter};
 
-/// A finished trial of one degree: (shape error, law, strain range, rms error).
-type Trial = (f64, Orthotropic, Option<StrainRange>, f64);
+/// A finished trial of one degree.
+type Trial = StageFit;
 
 /// The second start's new term: twice the stiffest old term's bend β = α·x̂, at least 0.5
 /// (η′ rising by e^0.5 over the tested range) and at most half the bound.
@@ -40,30 +39,30 @@ pub(super) fn stiff_beta(map: StageMap, prev: &[f64]) -> f64 {
 }
 
 impl Fitter<'_> {
-    /// Degree choice on the shell model (module doc): degree d + 1 is kept only when it
-    /// lowers the shape error by the degree gain and is plausible.
+    /// Degree choice on the shell model from material `m` (module doc): degree d + 1 is kept
+    /// only when it lowers the shape error by the degree gain and is plausible. The kept
+    /// degree's fit.
     pub(super) fn shell_degree_ladder(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         candidates: &[Vec<f64>],
     ) -> Result<StageFit, FitError> {
-        let base = self.fitted.law.clone();
         let mut best: Option<Trial> = None;
         for (i, cand) in candidates.iter().enumerate() {
             let degree = i + 1;
             let trial = match &best {
                 None => {
-                    self.fitted.law = base.clone();
-                    map.decode(cand, &mut self.fitted.law);
-                    let run = self.shell_stage(map, strips, level, true, StageMode::Full, None)?;
-                    let fit = run
-                        .fitted()
-                        .expect("a stage that raises no degree always runs");
-                    (fit.shape, self.fitted.law.clone(), fit.range, fit.rms)
+                    let mut law = m.law.clone();
+                    map.decode(cand, &mut law);
+                    let from = Fitted { law, ..m.clone() };
+                    let run = self.shell_stage(&from, map, strips, level, true, StageMode::Full)?;
+                    run.fitted()
+                        .expect("a stage that raises no degree always runs")
                 }
-                Some(prev) => match self.raise_degree(map, strips, level, cand, prev) {
+                Some(prev) => match self.raise_degree(m, map, strips, level, cand, prev) {
                     Ok(Some(t)) => t,
                     Ok(None) => {
                         self.journal.log_degree(format!(
@@ -83,23 +82,22 @@ impl Fitter<'_> {
                     }
                 },
             };
-            self.fitted.law = trial.1.clone();
             self.journal.degree(format!(
                 "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
                 map.dir.name(),
-                100.0 * trial.0,
+                100.0 * trial.shape,
                 level.0,
                 level.1
             ));
             if let Some(prev) = &best {
-                let why = if map.eta(&self.fitted.law).degree() < degree {
+                let why = if map.eta(&trial.law).degree() < degree {
                     Some("came out with a term too small to matter".to_string())
                 } else {
-                    super::plausible::implausible(&self.fitted.law, map, trial.2.as_ref())
+                    super::plausible::implausible(&trial.law, map, trial.range.as_ref())
                 };
                 let why = why.or_else(|| {
                     (self.ctx.opts.fixed_degree.is_none()
-                        && trial.0 > self.ctx.opts.degree_gain * prev.0)
+                        && trial.shape > self.ctx.opts.degree_gain * prev.shape)
                         .then(|| {
                             format!(
                                 "lowers the shape error by less than {:.0} %",
@@ -116,7 +114,7 @@ impl Fitter<'_> {
                     break;
                 }
             }
-            let good = trial.0 <= self.ctx.opts.degree_good;
+            let good = trial.shape <= self.ctx.opts.degree_good;
             best = Some(trial);
             if self.ctx.opts.fixed_degree.is_none() && good {
                 self.journal.degree(format!(
@@ -127,9 +125,7 @@ impl Fitter<'_> {
                 break;
             }
         }
-        let (shape, law, range, rms) = best.expect("one candidate at least");
-        self.fitted.law = law;
-        Ok(StageFit { shape, rms, range })
+        Ok(best.expect("one candidate at least"))
     }
 
     /// Degree d + 1 from degree d's trial `prev`: the mapped start, then, when that does not
@@ -137,13 +133,14 @@ impl Fitter<'_> {
     /// optimum.
     fn raise_degree(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         cand: &[f64],
         prev: &Trial,
     ) -> Result<Option<Trial>, FitError> {
-        let from = map.encode(&prev.1);
+        let from = map.encode(&prev.law);
         let fixed = self.ctx.opts.fixed_degree.is_some();
         let marks = (
             self.evidence.uncertainty.len(),
@@ -155,9 +152,13 @@ impl Fitter<'_> {
         } else {
             StageMode::Raise
         };
-        let mapped = self.raised_trial(map, strips, level, (&prev.1, &from), beta, mode);
+        let at_prev = Fitted {
+            law: prev.law.clone(),
+            ..m.clone()
+        };
+        let mapped = self.raised_trial(map, strips, level, (&at_prev, &from), beta, mode);
         let gain = self.ctx.opts.degree_gain;
-        let pays = |t: &Trial| t.0 <= gain * prev.0;
+        let pays = |t: &Trial| t.shape <= gain * prev.shape;
         let mapped = match mapped {
             Ok(Some(t)) if pays(&t) => return Ok(Some(t)),
             Ok(t) => t,
@@ -184,7 +185,7 @@ impl Fitter<'_> {
             map,
             strips,
             level,
-            (&prev.1, &from),
+            (&at_prev, &from),
             stiff,
             StageMode::RaiseDirect,
         );
@@ -198,40 +199,38 @@ impl Fitter<'_> {
             (Err(e), None) => return Err(e),
         };
         Ok(match (mapped, direct) {
-            (Some(m), Some(d)) if d.0 < m.0 => {
+            (Some(t), Some(d)) if d.shape < t.shape => {
                 // the mapped trial's records give way to the direct one's
                 self.evidence.uncertainty.drain(marks.0..between.0);
                 self.evidence.linearised.drain(marks.1..between.1);
                 Some(d)
             }
-            (Some(m), _) => {
+            (Some(t), _) => {
                 self.evidence.uncertainty.truncate(between.0);
                 self.evidence.linearised.truncate(between.1);
-                Some(m)
+                Some(t)
             }
             (None, d) => d,
         })
     }
 
     /// One start of a raised degree: degree d's law (and its variables) with a new
-    /// zero-weight term at bend `beta`, fitted in `mode`; `None` when the mapped start gave
-    /// it up.
+    /// zero-weight term at bend `beta`, fitted in `mode`; `None` when the mapped start gave it
+    /// up. `m` is degree d's material, `from` its variables.
     fn raised_trial(
         &mut self,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
-        (law, from): (&Orthotropic, &[f64]),
+        (m, from): (&Fitted, &[f64]),
         beta: f64,
         mode: StageMode,
     ) -> Result<Option<Trial>, FitError> {
-        let mut law = law.clone();
+        let mut law = m.law.clone();
         map.decode(&map.raise(from, beta), &mut law);
-        self.fitted.law = law;
-        let run = self.shell_stage(map, strips, level, true, mode, None)?;
-        Ok(run
-            .fitted()
-            .map(|fit| (fit.shape, self.fitted.law.clone(), fit.range, fit.rms)))
+        let from = Fitted { law, ..m.clone() };
+        let run = self.shell_stage(&from, map, strips, level, true, mode)?;
+        Ok(run.fitted())
     }
 }
 

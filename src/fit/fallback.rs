@@ -15,43 +15,43 @@
 
 use super::map::StageMap;
 use super::stages::{StageMode, StageRun};
-use super::{FitError, Fitter};
+use super::{FitError, Fitted, Fitter};
 use crate::material::Eta;
 
 /// What to try when a stage fails from every start, for the error message.
 const HINT: &str = "the stage failed from its start, from its law cut off where its stress stops rising and from a linear law; try `--max-degree 1`, `--strategy adaptive`, or `ks-fit check` on the dataset (units, toes, force_scale)";
 
 impl Fitter<'_> {
-    /// One tensile stage on the shell model (see [`Fitter::shell_stage_once`]), falling back
-    /// (module doc) where a full stage of the ladder fails to solve. Trials (raised degrees,
+    /// One tensile stage on the shell model from material `m` (see
+    /// [`Fitter::shell_stage_once`]), falling back (module doc) where a full stage of the
+    /// ladder fails to solve. Trials (raised degrees,
     /// screened or coupled stages) and the stiffness-alone stages fail as they are: their
     /// callers keep what they had.
     pub(super) fn shell_stage(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
         mode: StageMode,
-        screen: Option<(f64, f64)>,
     ) -> Result<StageRun, FitError> {
-        let start = self.fitted.law.clone();
-        let run = self.shell_stage_once(map, strips, level, strain_range, mode, screen);
-        let falls_back = mode == StageMode::Full && screen.is_none() && !map.coupling;
+        let run = self.shell_stage_once(m, map, strips, level, strain_range, mode);
+        let falls_back = mode == StageMode::Full && !map.coupling;
         let (stage, source) = match run {
             Err(FitError::Scene { stage, source }) if falls_back => (stage, source),
             other => return other,
         };
         let maps = self.fallback_maps(map);
         for linear in [false, true] {
-            self.fitted.law = start.clone();
+            let mut law = m.law.clone();
             let mut changed = false;
-            for m in &maps {
-                let note = super::plausible::cut_before_fall(&mut self.fitted.law, *m);
+            for other in &maps {
+                let note = super::plausible::cut_before_fall(&mut law, *other);
                 changed |= self.journal.law_note(note);
             }
-            if linear && map.eta(&self.fitted.law) != &Eta::linear() {
-                *map.eta_mut(&mut self.fitted.law) = Eta::linear();
+            if linear && map.eta(&law) != &Eta::linear() {
+                *map.eta_mut(&mut law) = Eta::linear();
                 changed = true;
             }
             if !changed {
@@ -67,11 +67,11 @@ impl Fitter<'_> {
             );
             self.journal.say(&note);
             self.journal.note(note);
-            if let Ok(done) = self.shell_stage_once(map, strips, level, strain_range, mode, None) {
+            let from = Fitted { law, ..m.clone() };
+            if let Ok(done) = self.shell_stage_once(&from, map, strips, level, strain_range, mode) {
                 return Ok(done);
             }
         }
-        self.fitted.law = start;
         Err(FitError::Stage {
             stage,
             source,

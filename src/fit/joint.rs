@@ -99,7 +99,7 @@ impl Fitter<'_> {
             "{} stiffness again over every strip it moves (the joint sweep)",
             map.dir.name()
         ));
-        self.shell_stage(map, strips, level, false, StageMode::Stiffness, None)?;
+        super::ladder::refit(self, map, strips, level, false, StageMode::Stiffness)?;
         Ok(())
     }
 }

@@ -6,6 +6,7 @@
 
 use super::map::StageMap;
 use super::mesh_check::MeshCheck;
+use super::stages::StageFit;
 use super::{FitError, Fitter, StageMode, StageSets};
 
 /// A stage whose determined quantities the last refinement moved by less than this is
@@ -60,7 +61,7 @@ pub(super) fn ladder(
             if !strips[2].is_empty() {
                 f.journal
                     .say("bias stage again, given the joint yarn stiffnesses");
-                f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
+                refit(f, maps[2], &strips[2], level, false, StageMode::Full)?;
             }
         }
         super::pipeline::bend_stage(f, level)?;
@@ -190,18 +191,20 @@ fn fit_level(
         let fit = if k == 2 && li == 0 && shear_candidates.len() > 1 {
             // the homogeneous strip models a clamped bias strip poorly: choose the shear
             // degree on the shell model itself
-            f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
+            let m = f.fitted.clone();
+            let fit = f.shell_degree_ladder(&m, maps[2], &strips[2], level, shear_candidates)?;
+            f.fitted.law = fit.law.clone();
+            fit
         } else {
-            f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
-                .fitted()
-                .expect("a stage that raises no degree always runs")
+            refit(f, maps[k], &strips[k], level, li == 0, StageMode::Full)?
         };
         let mut range = fit.range;
         if k == 2 && li == 0 {
             // then, with the degree chosen, whether the tension–shear coupling pays
-            let (map, r) = f.coupling_trial(maps[2], &strips[2], level, fit)?;
+            let (map, stands) = f.coupling_trial(maps[2], &strips[2], level, fit)?;
             maps[2] = map;
-            range = r;
+            range = stands.range;
+            f.fitted.law = stands.law;
             super::joint::without_sweep_if_coupled(f, sets);
         }
         // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
@@ -212,6 +215,24 @@ fn fit_level(
         f.journal.law_note(note);
     }
     Ok(())
+}
+
+/// A tensile stage from the fitted material, its optimum applied to the material.
+pub(super) fn refit(
+    f: &mut Fitter,
+    map: StageMap,
+    strips: &[usize],
+    level: (usize, usize),
+    strain_range: bool,
+    mode: StageMode,
+) -> Result<StageFit, FitError> {
+    let m = f.fitted.clone();
+    let fit = f
+        .shell_stage(&m, map, strips, level, strain_range, mode)?
+        .fitted()
+        .expect("a stage that is not a trial always runs");
+    f.fitted.law = fit.law.clone();
+    Ok(fit)
 }
 
 /// Direction `k`'s cut-off at 95 % of the largest strain its tests exercised (`lo`, `hi`:

@@ -312,6 +312,7 @@ struct Evidence {
 }
 
 /// The material being fitted: the stages' optima, applied in the order the stages run.
+#[derive(Clone)]
 struct Fitted {
     law: Orthotropic,
     thickness: f64,

@@ -328,7 +328,7 @@ fn double_and_refit(
             "{} stage refitted on its strips' own meshes",
             maps[k].dir.name()
         ));
-        f.shell_stage(maps[k], &stages[k], last, false, StageMode::Full, None)?;
+        super::ladder::refit(f, maps[k], &stages[k], last, false, StageMode::Full)?;
         // a yarn stage's joint stiffness follows it (an off-axis strip refined alone leaves
         // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
         f.joint_stiffness(maps[k], k, sets, last)?;

@@ -11,16 +11,21 @@ use super::map::StageMap;
 use super::optim::OptimReport;
 use super::surrogate::MappedStart;
 use super::uncertainty::Seen;
-use super::{FitError, Fitter, RigKey, StrainRange, Work};
+use super::{FitError, Fitted, Fitter, RigKey, StrainRange, Work};
+use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig};
 use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
 use std::time::Instant;
 
 /// What a tensile stage fits ([`Fitter::shell_stage`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum StageMode {
     /// every variable of the stage's map
     Full,
+    /// every variable, a trial screened at its space-mapped start: given up there unless the
+    /// shape error has not risen above `shape` or the rms error already fell by the degree
+    /// gain from `rms` (the coupling's trial, see [`super::coupling`])
+    Screened { shape: f64, rms: f64 },
     /// every variable, a degree just raised: given up when its space-mapped start finds no
     /// better law
     Raise,
@@ -36,19 +41,20 @@ pub(super) enum StageMode {
     Stiffness,
 }
 
-/// A tensile stage fitted: its shape error, its rms relative error and, when asked, the
-/// strains its strips exercise at the fitted law.
-#[derive(Clone, Copy, Debug)]
+/// A tensile stage fitted: the law at its optimum, its shape error, its rms relative error
+/// and, when asked, the strains its strips exercise there.
+#[derive(Clone, Debug)]
 pub(super) struct StageFit {
+    pub law: Orthotropic,
     pub shape: f64,
     pub rms: f64,
     pub range: Option<StrainRange>,
 }
 
 /// How a tensile stage's run ends ([`Fitter::shell_stage`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) enum StageRun {
-    Fitted(StageFit),
+    Fitted(Box<StageFit>),
     /// a trial given up at its space-mapped start; a screened trial's shape and rms errors
     /// there when the screen gave it up
     GivenUp(Option<(f64, f64)>),
@@ -58,7 +64,7 @@ impl StageRun {
     /// The fit, `None` for a trial given up.
     pub(super) fn fitted(self) -> Option<StageFit> {
         match self {
-            StageRun::Fitted(fit) => Some(fit),
+            StageRun::Fitted(fit) => Some(*fit),
             StageRun::GivenUp(_) => None,
         }
     }
@@ -66,8 +72,8 @@ impl StageRun {
 
 impl Fitter<'_> {
     /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
-    /// the current law alone (`shell_stage` falls back from it, see [`super::fallback`]);
-    /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
+    /// material `m` alone (`shell_stage` falls back from it, see [`super::fallback`]);
+    /// returns the law and the shape error at the optimum ([`super::shape_error`]) and, when asked, the
     /// strain range the strips exercise there. On the first level the stage starts with
     /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
     /// whose mapped steps find no better law is given up (`None`): a bet that the shell's own
@@ -78,22 +84,20 @@ impl Fitter<'_> {
     /// work (below).
     pub(super) fn shell_stage_once(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
         mode: StageMode,
-        screen: Option<(f64, f64)>,
     ) -> Result<StageRun, FitError> {
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         let t0 = Instant::now();
-        let mut sp = self.stage_problem(map, strips, level)?;
-        let mut p = self.unsaturated_start(map);
+        let mut sp = self.stage_problem(m, map, strips, level)?;
+        let mut p = self.unsaturated_start(&m.law, map);
         let first_level = level == self.ctx.opts.ladder[0];
         let opts = self.ctx.stage_options(level, 1e-12, sp.ncurves);
-        if let Some(given_up) =
-            self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)?
-        {
+        if let Some(given_up) = self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease)? {
             self.stats.time_stage(map.dir.name(), t0);
             return Ok(given_up);
         }
@@ -108,9 +112,10 @@ impl Fitter<'_> {
         )
         .map_err(stage_failed(map, level))?;
         self.stats.record(sp.counts.work());
-        map.decode(&p, &mut self.fitted.law);
+        let mut law = m.law.clone();
+        map.decode(&p, &mut law);
         let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
-        let shape = self.stage_optimum(&sp, &p, err);
+        let shape = self.stage_optimum(&sp, &p, err, &law);
         let msg = self.stage_line(&sp, &p, (err, shape), &rep);
         self.journal.say(&msg);
         if dropped > 0 {
@@ -123,7 +128,7 @@ impl Fitter<'_> {
             ));
         }
         let range = if strain_range {
-            self.stage_strain_range(map, &mut sp.rigs)?
+            self.stage_strain_range(m, &law, map, &mut sp.rigs)?
         } else {
             None
         };
@@ -131,17 +136,19 @@ impl Fitter<'_> {
             self.lab.keep_rig(key, rig);
         }
         self.stats.time_stage(map.dir.name(), t0);
-        Ok(StageRun::Fitted(StageFit {
+        Ok(StageRun::Fitted(Box::new(StageFit {
+            law,
             shape,
             rms: err,
             range,
-        }))
+        })))
     }
 
     /// A tensile stage's problem: the rigs of its strips on a mesh level, set up for the
-    /// stage's map, with the strips' fitted curves, at the current law and thickness.
+    /// stage's map, with the strips' fitted curves, at material `m`.
     fn stage_problem<'s>(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &'s [usize],
         level: (usize, usize),
@@ -149,11 +156,9 @@ impl Fitter<'_> {
         let mut rigs = Vec::new();
         for &s in strips {
             let angle = self.ctx.prep.strips[s].angle_deg;
-            let (key, mut rig) = self
-                .lab
-                .strip_rig(&self.ctx, &self.fitted, s, angle, level)?;
-            rig.set_wanted(Some(map.wanted(&self.fitted.law)));
-            rig.set_bending(self.fitted.bending);
+            let (key, mut rig) = self.lab.strip_rig(&self.ctx, m, s, angle, level)?;
+            rig.set_wanted(Some(map.wanted(&m.law)));
+            rig.set_bending(m.bending);
             rigs.push((key, rig));
         }
         let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.ctx.used_curves(&[s])).collect();
@@ -166,8 +171,8 @@ impl Fitter<'_> {
         Ok(StageProblem {
             map,
             level,
-            base: self.fitted.law.clone(),
-            tau: self.fitted.thickness,
+            base: m.law.clone(),
+            tau: m.thickness,
             strips,
             curves,
             ncurves,
@@ -188,7 +193,6 @@ impl Fitter<'_> {
         p: &mut Vec<f64>,
         mode: StageMode,
         rel_decrease: f64,
-        screen: Option<(f64, f64)>,
     ) -> Result<Option<StageRun>, FitError> {
         let (map, level) = (sp.map, sp.level);
         let fail = stage_failed(map, level);
@@ -215,12 +219,13 @@ impl Fitter<'_> {
         let note = mapped_note(map, p, level, &m);
         // a trial screened at its mapped start: given up unless the shape error has not
         // risen or the rms error already fell by the degree gain there
-        let screened = match screen {
-            Some(s) => {
+        let screened = match mode {
+            StageMode::Screened { shape, rms } => {
                 let gain = self.ctx.opts.degree_gain;
+                let s = (shape, rms);
                 screen_trial(sp, &self.ctx.prep, p, m.after, s, gain).map_err(fail)?
             }
-            None => None,
+            _ => None,
         };
         if (mode == StageMode::Raise && m.kept == 0) || screened.is_some() {
             self.stats.record(sp.counts.work());
@@ -236,11 +241,11 @@ impl Fitter<'_> {
         Ok(None)
     }
 
-    /// The stage's start from the current law, the tension–shear coupling moved back from a
-    /// saturated bound (and said so).
-    fn unsaturated_start(&mut self, map: StageMap) -> Vec<f64> {
-        let p = map.encode_start(&self.fitted.law);
-        if p != map.encode(&self.fitted.law) {
+    /// The stage's start from `law`, the tension–shear coupling moved back from a saturated
+    /// bound (and said so).
+    fn unsaturated_start(&mut self, law: &Orthotropic, map: StageMap) -> Vec<f64> {
+        let p = map.encode_start(law);
+        if p != map.encode(law) {
             self.journal.say(&format!(
                 "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
                 map.dir.name(),
@@ -253,7 +258,7 @@ impl Fitter<'_> {
     /// At the stage's optimum p: records the standard errors and the linearisation from the
     /// Jacobian computed there, and returns the shape error (`err`, the rms error, where p has
     /// no evaluation).
-    fn stage_optimum(&mut self, sp: &StageProblem, p: &[f64], err: f64) -> f64 {
+    fn stage_optimum(&mut self, sp: &StageProblem, p: &[f64], err: f64, law: &Orthotropic) -> f64 {
         let (map, lens) = (sp.map, &sp.lens[..]);
         let shape = sp
             .seen
@@ -268,32 +273,18 @@ impl Fitter<'_> {
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
-            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.fitted.law);
+            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, law);
             self.evidence
                 .uncertainty
                 .push((map.dir, p.to_vec(), errors));
             let tau = sp.tau;
-            let offaxis = (map.coupling && self.fitted.law.coupling.is_some()).then(|| {
-                super::uncertainty::offaxis_rows(
-                    &self.ctx.prep,
-                    &self.fitted.law,
-                    tau,
-                    &map,
-                    p,
-                    sp.strips,
-                )
+            let offaxis = (map.coupling && law.coupling.is_some()).then(|| {
+                super::uncertainty::offaxis_rows(&self.ctx.prep, law, tau, &map, p, sp.strips)
             });
             self.evidence
                 .linearised
                 .push(super::mesh_check::Linearised::tensile(
-                    &map,
-                    p,
-                    &self.fitted.law,
-                    sp.strips,
-                    sp.level,
-                    j,
-                    lens,
-                    offaxis,
+                    &map, p, law, sp.strips, sp.level, j, lens, offaxis,
                 ));
         }
         shape
@@ -345,21 +336,22 @@ impl Fitter<'_> {
             .collect()
     }
 
-    /// The strains the stage's strips exercise at the fitted law.
+    /// The strains the stage's strips exercise at `law` (with `m`'s thickness and bending).
     fn stage_strain_range(
         &mut self,
+        m: &Fitted,
+        law: &Orthotropic,
         map: StageMap,
         rigs: &mut [(RigKey, StripRig)],
     ) -> Result<Option<StrainRange>, FitError> {
         let mut range: Option<StrainRange> = None;
-        let law = self.fitted.law.clone();
         for (_, rig) in rigs {
-            super::rigs::run_rig(rig, &law, &self.fitted, &mut self.stats, false).map_err(
-                |source| FitError::Scene {
+            super::rigs::run_rig(rig, law, m, &mut self.stats, false).map_err(|source| {
+                FitError::Scene {
                     stage: format!("{} strips at the fit", map.dir.name()),
                     source,
-                },
-            )?;
+                }
+            })?;
             if let Some((lo, hi)) = rig.strain_range() {
                 let r = range.get_or_insert((lo, hi));
                 for i in 0..3 {
