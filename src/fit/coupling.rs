@@ -38,7 +38,7 @@
 
 use super::map::StageMap;
 use super::stages::{StageFit, StageMode, StageRun};
-use super::{FitError, Fitted, Fitter};
+use super::{Bench, Context, FitError, Fitted};
 use crate::material::{Law, Orthotropic, ShearCoupling};
 
 /// `fit --shear-coupling`.
@@ -105,20 +105,20 @@ impl CouplingOutcome {
 }
 
 /// Distinct strip angles among `strips`, to 0.01°.
-fn distinct_angles(f: &Fitter, strips: &[usize]) -> usize {
+fn distinct_angles(ctx: &Context, strips: &[usize]) -> usize {
     let mut a: Vec<i64> = strips
         .iter()
-        .map(|&s| (100.0 * f.ctx.prep.strips[s].angle_deg).round() as i64)
+        .map(|&s| (100.0 * ctx.prep.strips[s].angle_deg).round() as i64)
         .collect();
     a.sort_unstable();
     a.dedup();
     a.len()
 }
 
-impl Fitter<'_> {
+impl Bench<'_, '_> {
     /// Whether `law`'s tangent is positive definite along every strip's homogeneous strain
-    /// path to twice its largest elongation (20 points each; module doc).
-    fn convex_along(&self, law: &Orthotropic, strips: &[usize]) -> bool {
+    /// path (at thickness `tau`) to twice its largest elongation (20 points each; module doc).
+    fn convex_along(&self, law: &Orthotropic, tau: f64, strips: &[usize]) -> bool {
         strips.iter().all(|&s| {
             let st = &self.ctx.prep.strips[s];
             let top = 2.0 * st.nodes.last().copied().unwrap_or(0.0);
@@ -128,7 +128,7 @@ impl Fitter<'_> {
                 st.angle_deg,
                 st.width,
                 st.length,
-                self.fitted.thickness,
+                tau,
                 &dl,
                 false,
             );
@@ -143,28 +143,27 @@ impl Fitter<'_> {
     }
 
     /// The coupling's trial on the first level (module doc); `fit` is the separable shear
-    /// stage's, applied to the fitted material. Returns the stage's map for the later levels
-    /// (coupled if kept) and the fit that stands.
+    /// stage's from material `m`. Returns the stage's map for the later levels (coupled if
+    /// kept), the fit that stands and what became of the coupling.
     pub(super) fn coupling_trial(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         fit: StageFit,
-    ) -> Result<(StageMap, StageFit), FitError> {
+    ) -> Result<(StageMap, StageFit, CouplingOutcome), FitError> {
         let range = fit.range;
         let mode = self.ctx.opts.shear_coupling;
-        let angles = distinct_angles(self, strips);
+        let angles = distinct_angles(self.ctx, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
-            self.fitted.coupling = CouplingOutcome::Off;
-            return Ok((map, fit));
+            return Ok((map, fit, CouplingOutcome::Off));
         }
         if mode == CouplingMode::Auto && angles < 2 {
-            self.fitted.coupling = CouplingOutcome::NotTried;
             self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
-            return Ok((map, fit));
+            return Ok((map, fit, CouplingOutcome::NotTried));
         }
         let coupled = StageMap {
             coupling: true,
@@ -179,10 +178,7 @@ impl Fitter<'_> {
             warp: 0.0,
             weft: 0.0,
         });
-        let from = Fitted {
-            law,
-            ..self.fitted.clone()
-        };
+        let from = Fitted { law, ..m.clone() };
         self.journal
             .say("bias: refitting with the tension–shear coupling free");
         let without = StageErrors {
@@ -207,7 +203,7 @@ impl Fitter<'_> {
 
                 let pays = with.shape <= gain * without.shape
                     || (with.rms <= gain * without.rms && with.shape <= without.shape);
-                let why = if !self.convex_along(&coupled_fit.law, strips) {
+                let why = if !self.convex_along(&coupled_fit.law, m.thickness, strips) {
                     Some("the coupled law's tangent is not positive definite along the strips' strain paths (to twice the tested elongation)".to_string())
                 } else if mode == CouplingMode::Auto && !pays {
                     Some(format!(
@@ -256,8 +252,7 @@ impl Fitter<'_> {
                     "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
                     level.0, level.1, c.warp, c.weft
                 ));
-                self.fitted.coupling = CouplingOutcome::Kept { without, with };
-                Ok((coupled, stands))
+                Ok((coupled, stands, CouplingOutcome::Kept { without, with }))
             }
             Err(rejected) => {
                 if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
@@ -268,8 +263,7 @@ impl Fitter<'_> {
                 }
                 self.evidence.uncertainty.truncate(saved.0);
                 self.evidence.linearised.truncate(saved.1);
-                self.fitted.coupling = rejected;
-                Ok((map, fit))
+                Ok((map, fit, rejected))
             }
         }
     }

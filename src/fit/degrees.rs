@@ -22,7 +22,7 @@
 
 use super::map::{var_to_beta, StageMap, BETA_MAX};
 use super::stages::{StageFit, StageMode};
-use super::{FitError, Fitted, Fitter};
+use super::{Bench, FitError, Fitted};
 
 /// A finished trial of one degree.
 type Trial = StageFit;
@@ -38,7 +38,7 @@ pub(super) fn stiff_beta(map: StageMap, prev: &[f64]) -> f64 {
     (2.0 * stiffest).clamp(0.5, 0.5 * BETA_MAX)
 }
 
-impl Fitter<'_> {
+impl Bench<'_, '_> {
     /// Degree choice on the shell model from material `m` (module doc): degree d + 1 is kept
     /// only when it lowers the shape error by the degree gain and is plausible. The kept
     /// degree's fit.

@@ -15,15 +15,15 @@
 
 use super::map::StageMap;
 use super::stages::{StageMode, StageRun};
-use super::{FitError, Fitted, Fitter};
+use super::{Bench, FitError, Fitted};
 use crate::material::Eta;
 
 /// What to try when a stage fails from every start, for the error message.
 const HINT: &str = "the stage failed from its start, from its law cut off where its stress stops rising and from a linear law; try `--max-degree 1`, `--strategy adaptive`, or `ks-fit check` on the dataset (units, toes, force_scale)";
 
-impl Fitter<'_> {
+impl Bench<'_, '_> {
     /// One tensile stage on the shell model from material `m` (see
-    /// [`Fitter::shell_stage_once`]), falling back (module doc) where a full stage of the
+    /// [`Bench::shell_stage_once`]), falling back (module doc) where a full stage of the
     /// ladder fails to solve. Trials (raised degrees,
     /// screened or coupled stages) and the stiffness-alone stages fail as they are: their
     /// callers keep what they had.

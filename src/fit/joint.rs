@@ -78,28 +78,26 @@ pub(super) fn without_sweep_if_coupled(f: &mut Fitter, sets: &mut StageSets) {
     }
 }
 
-impl Fitter<'_> {
-    /// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
-    /// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
-    /// shear, or for a known stiffness.
-    pub(super) fn joint_stiffness(
-        &mut self,
-        map: StageMap,
-        k: usize,
-        sets: &StageSets,
-        level: (usize, usize),
-    ) -> Result<(), FitError> {
-        let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
-            return Ok(());
-        };
-        if strips.is_empty() {
-            return Ok(());
-        }
-        self.journal.say(&format!(
-            "{} stiffness again over every strip it moves (the joint sweep)",
-            map.dir.name()
-        ));
-        super::ladder::refit(self, map, strips, level, false, StageMode::Stiffness)?;
-        Ok(())
+/// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
+/// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
+/// shear, or for a known stiffness.
+pub(super) fn joint_stiffness(
+    f: &mut Fitter,
+    map: StageMap,
+    k: usize,
+    sets: &StageSets,
+    level: (usize, usize),
+) -> Result<(), FitError> {
+    let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
+        return Ok(());
+    };
+    if strips.is_empty() {
+        return Ok(());
     }
+    f.journal.say(&format!(
+        "{} stiffness again over every strip it moves (the joint sweep)",
+        map.dir.name()
+    ));
+    super::ladder::refit(f, map, strips, level, false, StageMode::Stiffness)?;
+    Ok(())
 }

@@ -56,8 +56,8 @@ pub(super) fn ladder(
         if li == 0 && sets.joint.is_some() {
             // the joint sweep: each yarn stiffness over the strips it moves, then the shear
             // given them
-            f.joint_stiffness(maps[0], 0, sets, level)?;
-            f.joint_stiffness(maps[1], 1, sets, level)?;
+            super::joint::joint_stiffness(f, maps[0], 0, sets, level)?;
+            super::joint::joint_stiffness(f, maps[1], 1, sets, level)?;
             if !strips[2].is_empty() {
                 f.journal
                     .say("bias stage again, given the joint yarn stiffnesses");
@@ -66,7 +66,7 @@ pub(super) fn ladder(
         }
         super::pipeline::bend_stage(f, level)?;
         if li + 1 < opts.ladder.len() {
-            previous = Some(f.fitted_forces(&all, level)?);
+            previous = Some(fitted_forces(f, &all, level)?);
         }
     }
     Ok(meshes)
@@ -108,7 +108,7 @@ fn refinement_check(
     level: (usize, usize),
 ) -> Result<(Option<String>, Option<MeshCheck>), FitError> {
     let opts = f.ctx.opts;
-    let now = f.fitted_forces(all, level)?;
+    let now = fitted_forces(f, all, level)?;
     let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
     let change = super::mean_abs_finite(&d);
     f.journal.say(&format!(
@@ -183,7 +183,7 @@ fn fit_level(
         if li > 0 && k < 2 && sets.joint.as_ref().is_some_and(|j| !j[k].is_empty()) {
             // with the joint sweep a finer level refits the yarn stiffness over the joint
             // strips; η's shape stays the first level's (the mesh check measures it)
-            f.joint_stiffness(maps[k], k, sets, level)?;
+            super::joint::joint_stiffness(f, maps[k], k, sets, level)?;
             let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
             f.journal.law_note(note);
             continue;
@@ -191,8 +191,8 @@ fn fit_level(
         let fit = if k == 2 && li == 0 && shear_candidates.len() > 1 {
             // the homogeneous strip models a clamped bias strip poorly: choose the shear
             // degree on the shell model itself
-            let m = f.fitted.clone();
-            let fit = f.shell_degree_ladder(&m, maps[2], &strips[2], level, shear_candidates)?;
+            let (mut bench, m) = f.bench();
+            let fit = bench.shell_degree_ladder(m, maps[2], &strips[2], level, shear_candidates)?;
             f.fitted.law = fit.law.clone();
             fit
         } else {
@@ -201,10 +201,13 @@ fn fit_level(
         let mut range = fit.range;
         if k == 2 && li == 0 {
             // then, with the degree chosen, whether the tension–shear coupling pays
-            let (map, stands) = f.coupling_trial(maps[2], &strips[2], level, fit)?;
+            let (mut bench, m) = f.bench();
+            let (map, stands, outcome) =
+                bench.coupling_trial(m, maps[2], &strips[2], level, fit)?;
             maps[2] = map;
             range = stands.range;
             f.fitted.law = stands.law;
+            f.fitted.coupling = outcome;
             super::joint::without_sweep_if_coupled(f, sets);
         }
         // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
@@ -217,6 +220,29 @@ fn fit_level(
     Ok(())
 }
 
+/// Forces of every fitted curve on a mesh level at the current material (for the
+/// ladder's change measure).
+fn fitted_forces(
+    f: &mut Fitter,
+    strips: &[usize],
+    level: (usize, usize),
+) -> Result<Vec<f64>, FitError> {
+    let jobs: Vec<(usize, f64)> = strips
+        .iter()
+        .map(|&s| (s, f.ctx.prep.strips[s].angle_deg))
+        .collect();
+    let nodes = f
+        .lab
+        .predict_many(&f.ctx, &f.fitted, &mut f.stats, &jobs, level)?;
+    let mut out = Vec::new();
+    for (&s, node) in strips.iter().zip(&nodes) {
+        for c in f.ctx.used_curves(&[s]) {
+            out.extend(f.ctx.curve_forces(c, node));
+        }
+    }
+    Ok(out)
+}
+
 /// A tensile stage from the fitted material, its optimum applied to the material.
 pub(super) fn refit(
     f: &mut Fitter,
@@ -226,9 +252,9 @@ pub(super) fn refit(
     strain_range: bool,
     mode: StageMode,
 ) -> Result<StageFit, FitError> {
-    let m = f.fitted.clone();
-    let fit = f
-        .shell_stage(&m, map, strips, level, strain_range, mode)?
+    let (mut bench, m) = f.bench();
+    let fit = bench
+        .shell_stage(m, map, strips, level, strain_range, mode)?
         .fitted()
         .expect("a stage that is not a trial always runs");
     f.fitted.law = fit.law.clone();

@@ -436,7 +436,7 @@ impl Fitter<'_> {
         &mut self,
         from: (usize, usize),
     ) -> Result<Option<MeshCheck>, FitError> {
-        let errors = self.final_uncertainty();
+        let errors = self.evidence.final_uncertainty(&self.fitted.law);
         let determined = |name: &str| {
             errors
                 .iter()

@@ -345,6 +345,38 @@ impl Fitted {
     }
 }
 
+impl Evidence {
+    /// Every fitted parameter's standard error at the final `law`: each tensile stage's last run at the law's
+    /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
+    /// or bending stage's.
+    fn final_uncertainty(&self, law: &Orthotropic) -> Vec<uncertainty::ParamError> {
+        let mut out = Vec::new();
+        for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
+            let (eta, c) = match dir {
+                Direction::Warp => (&law.warp, law.a11),
+                Direction::Weft => (&law.weft, law.a22),
+                Direction::Shear => (&law.shear, law.g12),
+            };
+            let found = self.uncertainty.iter().rev().find(|(d, _, errors)| {
+                *d == dir
+                    && errors.iter().filter(|e| e.name.contains("_alpha_")).count() == eta.degree()
+            });
+            if let Some((_, _, errors)) = found {
+                for e in errors {
+                    let mut e = e.clone();
+                    if e.name.ends_with("_pa") && e.value > 0.0 {
+                        e.std_error = e.std_error.map(|s| s * c / e.value);
+                        e.value = c;
+                    }
+                    out.push(e);
+                }
+            }
+        }
+        out.extend(self.stage_errors.iter().cloned());
+        out
+    }
+}
+
 /// What every stage reads and none changes: the dataset, the options and what set-up decided.
 struct Context<'a> {
     data: &'a FabricDataset,
@@ -355,6 +387,17 @@ struct Context<'a> {
     prep: Prepared,
     /// the bends fit rigidities of their own (`--bending`) rather than the thickness
     own_bending: bool,
+}
+
+/// What a stage works with: the context it reads, the lab it solves in, the record it writes
+/// to and the evidence it leaves. Not the fitted material: a stage is given the material it
+/// starts from and returns its optimum, which the pipeline applies.
+struct Bench<'f, 'a> {
+    ctx: &'f Context<'a>,
+    lab: &'f mut rigs::Lab,
+    journal: &'f mut journal::Journal<'a>,
+    stats: &'f mut FitStats,
+    evidence: &'f mut Evidence,
 }
 
 /// The fitter's working state.
@@ -371,41 +414,17 @@ struct Fitter<'a> {
     lab: rigs::Lab,
 }
 
-impl Fitter<'_> {
-    /// Every fitted parameter's standard error: each tensile stage's last run at the law's
-    /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
-    /// or bending stage's.
-    fn final_uncertainty(&self) -> Vec<uncertainty::ParamError> {
-        let mut out = Vec::new();
-        for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
-            let (eta, c) = match dir {
-                Direction::Warp => (&self.fitted.law.warp, self.fitted.law.a11),
-                Direction::Weft => (&self.fitted.law.weft, self.fitted.law.a22),
-                Direction::Shear => (&self.fitted.law.shear, self.fitted.law.g12),
-            };
-            let found = self
-                .evidence
-                .uncertainty
-                .iter()
-                .rev()
-                .find(|(d, _, errors)| {
-                    *d == dir
-                        && errors.iter().filter(|e| e.name.contains("_alpha_")).count()
-                            == eta.degree()
-                });
-            if let Some((_, _, errors)) = found {
-                for e in errors {
-                    let mut e = e.clone();
-                    if e.name.ends_with("_pa") && e.value > 0.0 {
-                        e.std_error = e.std_error.map(|s| s * c / e.value);
-                        e.value = c;
-                    }
-                    out.push(e);
-                }
-            }
-        }
-        out.extend(self.evidence.stage_errors.iter().cloned());
-        out
+impl<'a> Fitter<'a> {
+    /// The bench the stages work at, and the fitted material beside it.
+    fn bench(&mut self) -> (Bench<'_, 'a>, &Fitted) {
+        let bench = Bench {
+            ctx: &self.ctx,
+            lab: &mut self.lab,
+            journal: &mut self.journal,
+            stats: &mut self.stats,
+            evidence: &mut self.evidence,
+        };
+        (bench, &self.fitted)
     }
 }
 

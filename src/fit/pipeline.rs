@@ -302,7 +302,7 @@ fn checked_meshes(
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
     let strict = opts.test_meshes == TestMeshes::Strict;
     let t0 = Instant::now();
-    let mut uncertainty = f.final_uncertainty();
+    let mut uncertainty = f.evidence.final_uncertainty(&f.fitted.law);
     if opts.mesh_check == MeshCheckMode::Off {
         return Ok((uncertainty, None));
     }
@@ -316,7 +316,7 @@ fn checked_meshes(
             break;
         }
         let t0 = Instant::now();
-        uncertainty = f.final_uncertainty();
+        uncertainty = f.evidence.final_uncertainty(&f.fitted.law);
         check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
         f.stats.time_stage("mesh check", t0);
     }

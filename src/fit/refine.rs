@@ -331,7 +331,7 @@ fn double_and_refit(
         super::ladder::refit(f, maps[k], &stages[k], last, false, StageMode::Full)?;
         // a yarn stage's joint stiffness follows it (an off-axis strip refined alone leaves
         // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
-        f.joint_stiffness(maps[k], k, sets, last)?;
+        super::joint::joint_stiffness(f, maps[k], k, sets, last)?;
     }
     super::pipeline::bend_stage(f, last)?;
     Ok(())

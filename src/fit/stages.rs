@@ -11,13 +11,13 @@ use super::map::StageMap;
 use super::optim::OptimReport;
 use super::surrogate::MappedStart;
 use super::uncertainty::Seen;
-use super::{FitError, Fitted, Fitter, RigKey, StrainRange, Work};
+use super::{Bench, FitError, Fitted, RigKey, StrainRange, Work};
 use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig};
 use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
 use std::time::Instant;
 
-/// What a tensile stage fits ([`Fitter::shell_stage`]).
+/// What a tensile stage fits ([`Bench::shell_stage`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum StageMode {
     /// every variable of the stage's map
@@ -51,7 +51,7 @@ pub(super) struct StageFit {
     pub range: Option<StrainRange>,
 }
 
-/// How a tensile stage's run ends ([`Fitter::shell_stage`]).
+/// How a tensile stage's run ends ([`Bench::shell_stage`]).
 #[derive(Clone, Debug)]
 pub(super) enum StageRun {
     Fitted(Box<StageFit>),
@@ -70,7 +70,7 @@ impl StageRun {
     }
 }
 
-impl Fitter<'_> {
+impl Bench<'_, '_> {
     /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
     /// material `m` alone (`shell_stage` falls back from it, see [`super::fallback`]);
     /// returns the law and the shape error at the optimum ([`super::shape_error`]) and, when asked, the
@@ -156,7 +156,7 @@ impl Fitter<'_> {
         let mut rigs = Vec::new();
         for &s in strips {
             let angle = self.ctx.prep.strips[s].angle_deg;
-            let (key, mut rig) = self.lab.strip_rig(&self.ctx, m, s, angle, level)?;
+            let (key, mut rig) = self.lab.strip_rig(self.ctx, m, s, angle, level)?;
             rig.set_wanted(Some(map.wanted(&m.law)));
             rig.set_bending(m.bending);
             rigs.push((key, rig));
@@ -346,7 +346,7 @@ impl Fitter<'_> {
     ) -> Result<Option<StrainRange>, FitError> {
         let mut range: Option<StrainRange> = None;
         for (_, rig) in rigs {
-            super::rigs::run_rig(rig, law, m, &mut self.stats, false).map_err(|source| {
+            super::rigs::run_rig(rig, law, m, self.stats, false).map_err(|source| {
                 FitError::Scene {
                     stage: format!("{} strips at the fit", map.dir.name()),
                     source,
@@ -361,29 +361,6 @@ impl Fitter<'_> {
             }
         }
         Ok(range)
-    }
-
-    /// Forces of every fitted curve on a mesh level at the current material (for the
-    /// ladder's change measure).
-    pub(super) fn fitted_forces(
-        &mut self,
-        strips: &[usize],
-        level: (usize, usize),
-    ) -> Result<Vec<f64>, FitError> {
-        let jobs: Vec<(usize, f64)> = strips
-            .iter()
-            .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
-            .collect();
-        let nodes =
-            self.lab
-                .predict_many(&self.ctx, &self.fitted, &mut self.stats, &jobs, level)?;
-        let mut out = Vec::new();
-        for (&s, node) in strips.iter().zip(&nodes) {
-            for c in self.ctx.used_curves(&[s]) {
-                out.extend(self.ctx.curve_forces(c, node));
-            }
-        }
-        Ok(out)
     }
 }
 
