@@ -122,7 +122,8 @@ fn refinement_check(
     // a doubling: the refit's parameter change, solved (the forces just solved
     // are the check's defect); otherwise the forces' change decides
     let check = if level == (2 * from.0, 2 * from.1) {
-        f.refit_change(from)?
+        let (mut bench, m) = f.bench();
+        bench.refit_change(m, from)?
     } else {
         None
     };

@@ -62,7 +62,8 @@ pub fn fit(
     let tests = validation::outcomes(&mut f, last)?;
     let identifiability = validation::identifiability(&f, &strips);
     if let Some(m) = &mesh_check {
-        f.mesh_check_notes(last, m);
+        let (mut bench, fitted) = f.bench();
+        bench.mesh_check_notes(fitted, last, m);
     }
     f.stats.time_stage("report", t0);
     closing_notes(&mut f);
@@ -308,7 +309,12 @@ fn checked_meshes(
     }
     let mut check = match f.evidence.ladder_check.take() {
         Some(m) => Some(m),
-        None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
+        None => {
+            let (mut bench, m) = f.bench();
+            bench.mesh_check(m, last, opts.mesh_check, &|n| {
+                is_determined(&uncertainty, n)
+            })?
+        }
     };
     f.stats.time_stage("mesh check", t0);
     while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
@@ -317,7 +323,10 @@ fn checked_meshes(
         }
         let t0 = Instant::now();
         uncertainty = f.evidence.final_uncertainty(&f.fitted.law);
-        check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
+        let (mut bench, m) = f.bench();
+        check = bench.mesh_check(m, last, opts.mesh_check, &|n| {
+            is_determined(&uncertainty, n)
+        })?;
         f.stats.time_stage("mesh check", t0);
     }
     Ok((uncertainty, check))

@@ -1,12 +1,18 @@
 //! The mesh check's line in the fit's notes and progress.
 
 use super::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_PARAM_TOL};
-use crate::fit::Fitter;
+use crate::fit::{Bench, Fitted};
 
-impl Fitter<'_> {
-    /// The check's line in the notes, a warning when the fit is not mesh-independent (a
-    /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
-    pub(in crate::fit) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
+impl Bench<'_, '_> {
+    /// The check's line in the notes, a warning when the fit of material `fitted` is not
+    /// mesh-independent (a parameter moving by 1 % or more, a curve by 0.3 %, a drape angle
+    /// by 0.1°).
+    pub(in crate::fit) fn mesh_check_notes(
+        &mut self,
+        fitted: &Fitted,
+        last: (usize, usize),
+        m: &MeshCheck,
+    ) {
         let bad = !m.passes();
         let law = if m.law_change >= MESH_PARAM_TOL {
             format!(
@@ -24,7 +30,7 @@ impl Fitter<'_> {
                 "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
                 m.solved_on.0,
                 m.solved_on.1,
-                super::mesh_order(&self.lab, &self.ctx, &self.fitted),
+                super::mesh_order(self.lab, self.ctx, fitted),
                 m.mesh.0,
                 m.mesh.1
             )
