@@ -59,8 +59,9 @@ pub fn fit(
     }
     let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &sets, last)?;
     let t0 = Instant::now();
-    let tests = validation::outcomes(&mut f, last)?;
-    let identifiability = validation::identifiability(&f, &strips);
+    let (mut bench, fitted) = f.bench();
+    let tests = validation::outcomes(&mut bench, fitted, last)?;
+    let identifiability = validation::identifiability(&f.ctx, &f.fitted, &strips);
     if let Some(m) = &mesh_check {
         let (mut bench, fitted) = f.bench();
         bench.mesh_check_notes(fitted, last, m);
