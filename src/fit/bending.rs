@@ -12,7 +12,7 @@
 use super::mesh_check::Linearised;
 use super::optim::{minimize, Evaluation};
 use super::rigs::Lab;
-use super::thickness::BendFit;
+use super::thickness::{bend_evidence, drape_angles, BendFit};
 use super::uncertainty::ParamError;
 use super::{to_evaluation, Context, FitError, FitStats, Fitted, Work};
 use crate::assembly::STANDARD_GRAVITY;
@@ -70,6 +70,20 @@ fn start_rigidity(bends: &[BendTest], angle: f64, density: f64) -> f64 {
     (logs.iter().sum::<f64>() / logs.len().max(1) as f64).exp()
 }
 
+/// The D1388 rigidities of the warp and weft bends, the twist following them at the bias
+/// `ratio`.
+fn start_rigidities(bends: &[BendTest], density: f64, ratio: f64) -> BendingRigidity {
+    let (w, f) = (
+        start_rigidity(bends, 90.0, density),
+        start_rigidity(bends, 0.0, density),
+    );
+    BendingRigidity {
+        warp: w,
+        weft: f,
+        twist: twist_following(w, f, ratio),
+    }
+}
+
 /// Warp and weft rigidities (and twist, with an off-axis bend) from the bend tests, from
 /// material `m`.
 pub(super) fn bending_stage(
@@ -83,17 +97,9 @@ pub(super) fn bending_stage(
     let density = ctx.data.areal_density.unwrap_or(0.1);
     let ratio = bias_ratio(&m.law);
     let off_axis = bends.iter().any(|b| !along(b, 90.0) && !along(b, 0.0));
-    let b0 = m.bending.unwrap_or_else(|| {
-        let (w, f) = (
-            start_rigidity(bends, 90.0, density),
-            start_rigidity(bends, 0.0, density),
-        );
-        BendingRigidity {
-            warp: w,
-            weft: f,
-            twist: twist_following(w, f, ratio),
-        }
-    });
+    let b0 = m
+        .bending
+        .unwrap_or_else(|| start_rigidities(bends, density, ratio));
     let mut rigs = lab.bend_rigs(ctx, m, bends, level)?;
     // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
     let rigidity = Rigidity {
@@ -127,16 +133,10 @@ pub(super) fn bending_stage(
     stats.record(Work::single_solves(evals, newton));
     let b = rigidity.at(&p);
     let (linearised, errors) = bending_errors(b, off_axis, &seen, &p, level);
-    let mut angles = Vec::new();
-    for rig in &mut rigs {
+    let angles = drape_angles(&mut rigs, stats, "the fitted rigidities", |rig| {
         rig.set_bending(Some(b));
-        let pt = rig.run(false).map_err(|source| FitError::Scene {
-            stage: "drape angles at the fitted rigidities".into(),
-            source,
-        })?;
-        angles.push(pt.drape_angle_deg);
-        stats.record(Work::run(1, pt.report.iterations));
-    }
+        Ok(())
+    })?;
     lab.keep_bend_rigs(bends, level, rigs);
     let line = format!(
         "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
@@ -174,12 +174,7 @@ fn bending_errors(
     let n = p.len();
     let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
     let values = [b.warp, b.weft, b.twist];
-    let linearised = super::uncertainty::at_optimum(seen, p)
-        .map(|(_, j)| Linearised::bends(level, j, &names[..n], &values[..n]));
-    let mut errors = match super::uncertainty::at_optimum(seen, p) {
-        Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
-        None => Vec::new(),
-    };
+    let (linearised, mut errors) = bend_evidence(seen, p, level, &names[..n], &values[..n]);
     if !off_axis {
         errors.push(ParamError {
             name: names[2].into(),

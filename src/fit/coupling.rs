@@ -38,7 +38,7 @@
 
 use super::map::StageMap;
 use super::stages::{StageFit, StageMode, StageRun};
-use super::{Bench, Context, FitError, Fitted};
+use super::{Bench, Context, FitError, Fitted, StrainRange};
 use crate::material::{Law, Orthotropic, ShearCoupling};
 
 /// `fit --shear-coupling`.
@@ -153,7 +153,6 @@ impl Bench<'_, '_> {
         level: (usize, usize),
         fit: StageFit,
     ) -> Result<(StageMap, StageFit, CouplingOutcome), FitError> {
-        let range = fit.range;
         let mode = self.ctx.opts.shear_coupling;
         let angles = distinct_angles(self.ctx, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
@@ -193,17 +192,52 @@ impl Bench<'_, '_> {
             _ => StageMode::Full,
         };
         let run = self.shell_stage(&from, coupled, strips, level, true, stage_mode);
+        let outcome = self.judge(run, without, fit.range, (m.thickness, strips));
+        match outcome {
+            Ok((with, stands)) => {
+                let c = stands.law.coupling.expect("the coupled stage sets κ");
+                self.journal.log_degree(format!(
+                    "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
+                    level.0, level.1, c.warp, c.weft
+                ));
+                Ok((coupled, stands, CouplingOutcome::Kept { without, with }))
+            }
+            Err(rejected) => {
+                if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
+                    self.journal.log_degree(format!(
+                        "bias: tension–shear coupling not kept on {}×{}: {why} ({without} -> {with})",
+                        level.0, level.1
+                    ));
+                }
+                self.evidence.uncertainty.truncate(saved.0);
+                self.evidence.linearised.truncate(saved.1);
+                Ok((map, fit, rejected))
+            }
+        }
+    }
+
+    /// The coupled stage's `run` judged against the separable stage's errors `without`
+    /// (module doc; `tau` the thickness its law is checked at): the errors and the fit that
+    /// stand (with the separable `range` where the run has none), or why the coupling is not
+    /// kept.
+    fn judge(
+        &self,
+        run: Result<StageRun, FitError>,
+        without: StageErrors,
+        range: Option<StrainRange>,
+        (tau, strips): (f64, &[usize]),
+    ) -> Result<(StageErrors, StageFit), CouplingOutcome> {
+        let mode = self.ctx.opts.shear_coupling;
         let gain = self.ctx.opts.degree_gain;
-        let outcome = match run {
+        match run {
             Ok(StageRun::Fitted(coupled_fit)) => {
                 let with = StageErrors {
                     shape: coupled_fit.shape,
                     rms: coupled_fit.rms,
                 };
-
                 let pays = with.shape <= gain * without.shape
                     || (with.rms <= gain * without.rms && with.shape <= without.shape);
-                let why = if !self.convex_along(&coupled_fit.law, m.thickness, strips) {
+                let why = if !self.convex_along(&coupled_fit.law, tau, strips) {
                     Some("the coupled law's tangent is not positive definite along the strips' strain paths (to twice the tested elongation)".to_string())
                 } else if mode == CouplingMode::Auto && !pays {
                     Some(format!(
@@ -244,27 +278,6 @@ impl Bench<'_, '_> {
                 },
                 why: format!("its fit failed ({e})"),
             }),
-        };
-        match outcome {
-            Ok((with, stands)) => {
-                let c = stands.law.coupling.expect("the coupled stage sets κ");
-                self.journal.log_degree(format!(
-                    "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
-                    level.0, level.1, c.warp, c.weft
-                ));
-                Ok((coupled, stands, CouplingOutcome::Kept { without, with }))
-            }
-            Err(rejected) => {
-                if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
-                    self.journal.log_degree(format!(
-                        "bias: tension–shear coupling not kept on {}×{}: {why} ({without} -> {with})",
-                        level.0, level.1
-                    ));
-                }
-                self.evidence.uncertainty.truncate(saved.0);
-                self.evidence.linearised.truncate(saved.1);
-                Ok((map, fit, rejected))
-            }
         }
     }
 }

@@ -105,6 +105,58 @@ impl Lab {
     }
 }
 
+/// The law and thickness at ln(τ/τ⁰) = `q` from material `m`: a_ij and G12 scaled by τ⁰/τ.
+fn scaled(m: &Fitted, q: f64) -> (Orthotropic, f64) {
+    let tau0 = m.thickness;
+    let tau = tau0 * q.exp();
+    let s = tau0 / tau;
+    let mut law = m.law.clone();
+    law.a11 *= s;
+    law.a22 *= s;
+    law.a12 *= s;
+    law.g12 *= s;
+    (law, tau)
+}
+
+/// A bend stage's linearisation and standard errors at its optimum p, of `names` at `values`.
+pub(super) fn bend_evidence(
+    seen: &super::uncertainty::Seen,
+    p: &[f64],
+    level: (usize, usize),
+    names: &[&str],
+    values: &[f64],
+) -> (Option<Linearised>, Vec<ParamError>) {
+    let linearised = super::uncertainty::at_optimum(seen, p)
+        .map(|(_, j)| Linearised::bends(level, j, names, values));
+    let errors = match super::uncertainty::at_optimum(seen, p) {
+        Some((r, j)) => super::uncertainty::log_errors(names, values, j, r),
+        None => Vec::new(),
+    };
+    (linearised, errors)
+}
+
+/// The cantilevers' drape angles after `set` (warm: a Newton step or two each), their work
+/// recorded; `at` says at what, for an error.
+pub(super) fn drape_angles(
+    rigs: &mut [BendRig],
+    stats: &mut FitStats,
+    at: &str,
+    set: impl Fn(&mut BendRig) -> Result<(), SceneError>,
+) -> Result<Vec<f64>, FitError> {
+    let mut angles = Vec::new();
+    for rig in rigs {
+        let pt = set(rig)
+            .and_then(|_| rig.run(false))
+            .map_err(|source| FitError::Scene {
+                stage: format!("drape angles at {at}"),
+                source,
+            })?;
+        angles.push(pt.drape_angle_deg);
+        stats.record(Work::run(1, pt.report.iterations));
+    }
+    Ok(angles)
+}
+
 /// What a bend stage (the thickness, or the bends' own rigidities) found: the material at its
 /// optimum, the drape angles there, its evidence, and its line for the log.
 pub(super) struct BendFit {
@@ -132,23 +184,12 @@ pub(super) fn thickness_stage(
 ) -> Result<BendFit, FitError> {
     let bends = &ctx.data.bend;
     let mut rigs = lab.bend_rigs(ctx, m, bends, level)?;
-    let (law0, tau0) = (m.law.clone(), m.thickness);
-    let scaled = |q: &[f64]| {
-        let tau = tau0 * q[0].exp();
-        let s = tau0 / tau;
-        let mut law = law0.clone();
-        law.a11 *= s;
-        law.a22 *= s;
-        law.a12 *= s;
-        law.g12 *= s;
-        (law, tau)
-    };
     let mut p = vec![0.0];
     let opts = ctx.stage_options(level, 1e-14, bends.len());
     let (mut evals, mut newton) = (0, 0);
     let mut seen = super::uncertainty::Seen::new();
     let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
-        let (law, tau) = scaled(q);
+        let (law, tau) = scaled(m, q[0]);
         let (mut r, mut j) = (Vec::new(), Vec::new());
         // the cantilevers are independent: solved side by side, gathered in order
         let runs: Vec<Result<crate::scene::BendPoint, SceneError>> = rigs
@@ -183,35 +224,22 @@ pub(super) fn thickness_stage(
         source,
     })?;
     stats.record(Work::single_solves(evals, newton));
-    let (mut law, tau) = scaled(&p);
-    let linearised = super::uncertainty::at_optimum(&seen, &p)
-        .map(|(_, j)| Linearised::bends(level, j, &["thickness_mm"], &[tau * 1e3]));
-    let errors = match super::uncertainty::at_optimum(&seen, &p) {
-        Some((r, j)) => super::uncertainty::log_errors(&["thickness_mm"], &[tau * 1e3], j, r),
-        None => Vec::new(),
-    };
+    let (mut law, tau) = scaled(m, p[0]);
+    let (linearised, errors) = bend_evidence(&seen, &p, level, &["thickness_mm"], &[tau * 1e3]);
     // the drape angles at the accepted thickness (warm: a Newton step or two)
-    let mut angles = Vec::new();
-    for rig in &mut rigs {
-        let pt = rig
-            .set_material(&law, tau)
-            .and_then(|_| rig.run(false))
-            .map_err(|source| FitError::Scene {
-                stage: "drape angles at the fitted thickness".into(),
-                source,
-            })?;
-        angles.push(pt.drape_angle_deg);
-        stats.record(Work::run(1, pt.report.iterations));
-    }
+    let angles = drape_angles(&mut rigs, stats, "the fitted thickness", |rig| {
+        rig.set_material(&law, tau)
+    })?;
     lab.keep_bend_rigs(bends, level, rigs);
     // a known a12 is a known value: the scaling keeps a·τ, so restore the rule's a12
     if let super::map::A12Rule::Fixed(_) = ctx.a12 {
         ctx.a12.apply(&mut law);
     }
+    let mesh = lab.bend_level(level);
     let line = format!(
         "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
-        lab.bend_level(level).0,
-        lab.bend_level(level).1,
+        mesh.0,
+        mesh.1,
         tau * 1e3,
         100.0 * (rep.objective / bends.len() as f64).sqrt(),
         rep.evaluations,
