@@ -168,10 +168,7 @@ impl Bench<'_, '_> {
             coupling: true,
             ..map
         };
-        let saved = (
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
+        let saved = self.evidence.marks();
         let mut law = fit.law.clone();
         law.coupling = Some(ShearCoupling {
             warp: 0.0,

@@ -90,22 +90,7 @@ impl Bench<'_, '_> {
                 level.1
             ));
             if let Some(prev) = &best {
-                let why = if map.eta(&trial.law).degree() < degree {
-                    Some("came out with a term too small to matter".to_string())
-                } else {
-                    super::plausible::implausible(&trial.law, map, trial.range.as_ref())
-                };
-                let why = why.or_else(|| {
-                    (self.ctx.opts.fixed_degree.is_none()
-                        && trial.shape > self.ctx.opts.degree_gain * prev.shape)
-                        .then(|| {
-                            format!(
-                                "lowers the shape error by less than {:.0} %",
-                                100.0 * (1.0 - self.ctx.opts.degree_gain)
-                            )
-                        })
-                });
-                if let Some(why) = why {
+                if let Some(why) = self.not_kept(map, degree, &trial, prev) {
                     self.journal.log_degree(format!(
                         "{}: degree {} kept: degree {degree} {why}",
                         map.dir.name(),
@@ -128,6 +113,31 @@ impl Bench<'_, '_> {
         Ok(best.expect("one candidate at least"))
     }
 
+    /// Why the trial of `degree` is not kept over degree d's `prev` (module doc), if it is not.
+    fn not_kept(
+        &self,
+        map: StageMap,
+        degree: usize,
+        trial: &Trial,
+        prev: &Trial,
+    ) -> Option<String> {
+        let why = if map.eta(&trial.law).degree() < degree {
+            Some("came out with a term too small to matter".to_string())
+        } else {
+            super::plausible::implausible(&trial.law, map, trial.range.as_ref())
+        };
+        why.or_else(|| {
+            (self.ctx.opts.fixed_degree.is_none()
+                && trial.shape > self.ctx.opts.degree_gain * prev.shape)
+                .then(|| {
+                    format!(
+                        "lowers the shape error by less than {:.0} %",
+                        100.0 * (1.0 - self.ctx.opts.degree_gain)
+                    )
+                })
+        })
+    }
+
     /// Degree d + 1 from degree d's trial `prev`: the mapped start, then, when that does not
     /// pay, the stiff start (module doc); the better trial, or `None` when neither ran to an
     /// optimum.
@@ -142,10 +152,7 @@ impl Bench<'_, '_> {
     ) -> Result<Option<Trial>, FitError> {
         let from = map.encode(&prev.law);
         let fixed = self.ctx.opts.fixed_degree.is_some();
-        let marks = (
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
+        let marks = self.evidence.marks();
         let beta = super::plausible::new_term_beta(map, &from, cand);
         let mode = if fixed {
             StageMode::RaiseAlways
@@ -171,10 +178,7 @@ impl Bench<'_, '_> {
                 None
             }
         };
-        let between = (
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
+        let between = self.evidence.marks();
         let stiff = stiff_beta(map, &from);
         self.journal.say(&format!(
             "{}: degree {} again from a stiff new term (β = {stiff:.2}), by the shell's own iterations",

@@ -346,6 +346,12 @@ impl Fitted {
 }
 
 impl Evidence {
+    /// How many standard errors and linearisations the stages have left: a trial's records
+    /// are those past these marks.
+    fn marks(&self) -> (usize, usize) {
+        (self.uncertainty.len(), self.linearised.len())
+    }
+
     /// Every fitted parameter's standard error at the final `law`: each tensile stage's last run at the law's
     /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
     /// or bending stage's.

@@ -275,22 +275,28 @@ pub(super) fn refine_for_check(
         return Ok(false);
     }
     if bends {
-        let from = f.lab.bend_level(last);
-        let note = format!(
-            "per-test mesh: the bends refined from the {}x{} level's cantilevers to the {}x{} one's (the mesh check moves their thickness or rigidity by {:.2} %, their drape angles by {:.3}°)",
-            from.0,
-            from.1,
-            2 * from.0,
-            2 * from.1,
-            100.0 * bend_moved,
-            angle_moved
-        );
-        f.journal.say(&note);
-        f.journal.note(note);
-        f.lab.bend_refine += 1;
+        refine_bends(f, last, bend_moved, angle_moved);
     }
     double_and_refit(f, maps, sets, last, &todo)?;
     Ok(true)
+}
+
+/// Doubles the bends' cantilevers once more, with the note that says why (the check moves
+/// their thickness or rigidity by `bend_moved`, their drape angles by `angle_moved` degrees).
+fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_moved: f64) {
+    let from = f.lab.bend_level(last);
+    let note = format!(
+        "per-test mesh: the bends refined from the {}x{} level's cantilevers to the {}x{} one's (the mesh check moves their thickness or rigidity by {:.2} %, their drape angles by {:.3}°)",
+        from.0,
+        from.1,
+        2 * from.0,
+        2 * from.1,
+        100.0 * bend_moved,
+        angle_moved
+    );
+    f.journal.say(&note);
+    f.journal.note(note);
+    f.lab.bend_refine += 1;
 }
 
 /// Doubles the meshes of the strips in `todo` (each with the reason, for the notes), then

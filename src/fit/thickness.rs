@@ -185,9 +185,7 @@ pub(super) fn thickness_stage(
     let bends = &ctx.data.bend;
     let mut rigs = lab.bend_rigs(ctx, m, bends, level)?;
     let mut p = vec![0.0];
-    let opts = ctx.stage_options(level, 1e-14, bends.len());
-    let (mut evals, mut newton) = (0, 0);
-    let mut seen = super::uncertainty::Seen::new();
+    let (mut evals, mut newton, mut seen) = (0, 0, super::uncertainty::Seen::new());
     let problem = |q: &[f64], jac: bool| -> Result<Evaluation, SceneError> {
         let (law, tau) = scaled(m, q[0]);
         let (mut r, mut j) = (Vec::new(), Vec::new());
@@ -219,6 +217,7 @@ pub(super) fn thickness_stage(
         seen.push((q.to_vec(), e.residuals.clone(), e.jacobian.clone()));
         Ok(e)
     };
+    let opts = ctx.stage_options(level, 1e-14, bends.len());
     let rep = minimize(&mut p, &opts, problem).map_err(|source| FitError::Scene {
         stage: format!("thickness stage on {}×{}", level.0, level.1),
         source,

@@ -491,9 +491,41 @@ pub(super) fn identifiability(ctx: &Context, m: &Fitted, strips: &[Vec<usize>]) 
             )
         });
     }
-    // the tension–shear coupling: what the off-axis strips said of it
+    out.extend(coupling_line(&m.coupling, l.coupling));
+    out.push(thickness_line(ctx, m));
+    out
+}
+
+/// What determined the thickness of material `m`.
+fn thickness_line(ctx: &Context, m: &Fitted) -> String {
+    if ctx.data.known.thickness.is_some() {
+        format!("thickness τ = {:.4} mm: known", m.thickness * 1e3)
+    } else if m.bending.is_some() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
+            m.thickness * 1e3
+        )
+    } else if ctx.data.bend.is_empty() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
+            m.thickness * 1e3
+        )
+    } else {
+        format!(
+            "thickness τ = {:.4} mm: determined by the bends (bending rigidity a·τ³/12 with a·τ held)",
+            m.thickness * 1e3
+        )
+    }
+}
+
+/// What the off-axis strips said of the tension–shear coupling: its `outcome`, `kappa` the
+/// law's factors.
+fn coupling_line(
+    outcome: &super::coupling::CouplingOutcome,
+    kappa: Option<crate::material::ShearCoupling>,
+) -> Option<String> {
     use super::coupling::CouplingOutcome;
-    let coupling = match (&m.coupling, l.coupling) {
+    match (outcome, kappa) {
         (CouplingOutcome::Kept { without, with }, Some(c)) => Some(format!(
             "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty]), together with η4's exponents, which it trades off against along the strips' paths: what the strips pin down is each off-axis strip's stress (bias_stress_* in [fit.mesh_check])",
             c.warp, c.weft
@@ -505,25 +537,5 @@ pub(super) fn identifiability(ctx: &Context, m: &Fitted, strips: &[Vec<usize>]) 
             "tension–shear coupling: assumed absent (the separable law): one off-axis angle cannot tell it from the shear law's own nonlinearity (fit two or more off-axis angles to test it)".to_string(),
         ),
         _ => None,
-    };
-    out.extend(coupling);
-    out.push(if k.thickness.is_some() {
-        format!("thickness τ = {:.4} mm: known", tau * 1e3)
-    } else if m.bending.is_some() {
-        format!(
-            "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
-            tau * 1e3
-        )
-    } else if ctx.data.bend.is_empty() {
-        format!(
-            "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
-            tau * 1e3
-        )
-    } else {
-        format!(
-            "thickness τ = {:.4} mm: determined by the bends (bending rigidity a·τ³/12 with a·τ held)",
-            tau * 1e3
-        )
-    });
-    out
+    }
 }

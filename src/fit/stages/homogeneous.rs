@@ -78,16 +78,7 @@ pub(in crate::fit) fn bootstrap_all(
     // the two agree best) it misjudges the strip badly (a shape error of 12–18 % over 22.5°,
     // 45° and 67.5° on the bundled fabrics, with starts the shell could not solve), so the
     // shear is bootstrapped on the strips closest to 45° only; the shell stages use them all
-    let nearest = strips[2]
-        .iter()
-        .map(|&s| (b.ctx.prep.strips[s].angle_deg - 45.0).abs())
-        .fold(f64::INFINITY, f64::min);
-    let bias: Vec<usize> = strips[2]
-        .iter()
-        .copied()
-        .filter(|&s| (b.ctx.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
-        .collect();
-    let shear = b.ctx.used_curves(&bias);
+    let shear = b.ctx.used_curves(&nearest_45(b.ctx, &strips[2]));
     if !shear.is_empty() {
         let (q, all) = b.direction(&law, maps[2], &shear);
         maps[2].decode(&q, &mut law);
@@ -104,7 +95,33 @@ pub(in crate::fit) fn bootstrap_all(
     (law, shear_candidates)
 }
 
+/// The strips among `bias` cut nearest to 45°.
+fn nearest_45(ctx: &Context, bias: &[usize]) -> Vec<usize> {
+    let nearest = bias
+        .iter()
+        .map(|&s| (ctx.prep.strips[s].angle_deg - 45.0).abs())
+        .fold(f64::INFINITY, f64::min);
+    bias.iter()
+        .copied()
+        .filter(|&s| (ctx.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
+        .collect()
+}
+
 impl Bootstrap<'_, '_> {
+    /// The secant stiffness of curve `c` at its last point, as the stiffness a stage of
+    /// `map` starts degree 1 from.
+    fn secant(&self, map: StageMap, c: usize) -> f64 {
+        let curve = &self.ctx.prep.curves[c];
+        let s = &self.ctx.prep.strips[curve.strip];
+        let (dl, f) = *curve.points.last().expect("a curve with points");
+        let lambda = 1.0 + dl / s.length;
+        let secant = f / (s.width * self.tau * lambda * crate::fit::green(dl, s.length));
+        match map.dir {
+            Direction::Shear => 0.25 * secant,
+            _ => secant,
+        }
+    }
+
     /// Bootstrap fits of one direction from several starts on the homogeneous strip over the
     /// stage's curves, side by side (independent fits; the first start with the least mean
     /// relative error wins, as one after another): (p, mean relative error, shape error).
@@ -139,28 +156,7 @@ impl Bootstrap<'_, '_> {
         map: StageMap,
         curves: &[usize],
     ) -> (Vec<f64>, Vec<Vec<f64>>) {
-        // secant stiffness of the first curve as the start of degree 1
-        let c0 = {
-            let curve = &self.ctx.prep.curves[curves[0]];
-            let s = &self.ctx.prep.strips[curve.strip];
-            let (dl, f) = *curve.points.last().expect("a curve with points");
-            let lambda = 1.0 + dl / s.length;
-            let secant = f / (s.width * self.tau * lambda * crate::fit::green(dl, s.length));
-            match map.dir {
-                Direction::Shear => 0.25 * secant,
-                _ => secant,
-            }
-        };
-        let starts = [1e-3, 1.0, 5.0]
-            .iter()
-            .map(|&beta| {
-                if map.c_known {
-                    vec![beta_to_var(beta)]
-                } else {
-                    vec![c0.ln(), beta_to_var(beta)]
-                }
-            })
-            .collect();
+        let starts = first_starts(map, self.secant(map, curves[0]));
         let Some(mut chosen) = self.best(law, map, curves, starts) else {
             return (map.encode(law), Vec::new());
         };
@@ -182,16 +178,7 @@ impl Bootstrap<'_, '_> {
                 ));
                 break;
             }
-            let prev = all.last().expect("degree 1").clone();
-            let mut starts = Vec::new();
-            for mu_new in [0.0, 0.3, -0.3, 0.7] {
-                for beta_new in [0.5, 2.0, 4.0, 5.5] {
-                    let mut p = map.raise(&prev, beta_new);
-                    let o = usize::from(!map.c_known);
-                    p[o + degree - 2] = mu_new;
-                    starts.push(p);
-                }
-            }
+            let starts = raised_starts(map, all.last().expect("degree 1"), degree);
             let Some(candidate) = self.best(law, map, curves, starts) else {
                 break;
             };
@@ -238,6 +225,35 @@ impl Bootstrap<'_, '_> {
         }
         (chosen.0, all)
     }
+}
+
+/// Starts of degree 1: the first curve's secant stiffness `c0` (unless known) at a few bends.
+fn first_starts(map: StageMap, c0: f64) -> Vec<Vec<f64>> {
+    [1e-3, 1.0, 5.0]
+        .iter()
+        .map(|&beta| {
+            if map.c_known {
+                vec![beta_to_var(beta)]
+            } else {
+                vec![c0.ln(), beta_to_var(beta)]
+            }
+        })
+        .collect()
+}
+
+/// Starts of degree `degree` from degree d's variables `prev`: the new term at a few bends
+/// and weights.
+fn raised_starts(map: StageMap, prev: &[f64], degree: usize) -> Vec<Vec<f64>> {
+    let mut starts = Vec::new();
+    for mu_new in [0.0, 0.3, -0.3, 0.7] {
+        for beta_new in [0.5, 2.0, 4.0, 5.5] {
+            let mut p = map.raise(prev, beta_new);
+            let o = usize::from(!map.c_known);
+            p[o + degree - 2] = mu_new;
+            starts.push(p);
+        }
+    }
+    starts
 }
 
 /// Whether the yarn law of `map` at the bootstrap's variables p falls eventually
