@@ -140,8 +140,8 @@ pub(super) fn bending_stage(
     lab.keep_bend_rigs(bends, level, rigs);
     let line = format!(
         "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
-        lab.bend_level(level).0,
-        lab.bend_level(level).1,
+        lab.meshes.bend_level(level).0,
+        lab.meshes.bend_level(level).1,
         b.warp,
         b.weft,
         b.twist,

@@ -30,7 +30,7 @@
 use super::map::StageMap;
 use super::mesh_check::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL};
 use super::preprocess::Strip;
-use super::rigs::{strip_mesh, Lab};
+use super::rigs::strip_mesh;
 use super::{mean_abs_finite, FitError, Fitter, StageMode};
 use crate::dataset::BendTest;
 use std::time::Instant;
@@ -90,30 +90,65 @@ struct StripCheck {
     tolerance: f64,
 }
 
-impl Lab {
+/// Each test's mesh against the ladder's level: the doublings of every strip and of the
+/// bends, which only this module's refinement adds to.
+#[derive(Default)]
+pub(super) struct Doublings {
+    /// times each strip's mesh is doubled beyond the ladder's level
+    strips: Vec<u32>,
+    /// times the bends' meshes are doubled beyond it
+    bends: u32,
+    /// every strip on the ladder's level whatever its own doublings (cheap diagnostics)
+    ladder: bool,
+}
+
+impl Doublings {
+    /// None yet, for `strips` strips.
+    pub(super) fn new(strips: usize) -> Self {
+        Self {
+            strips: vec![0; strips],
+            ..Self::default()
+        }
+    }
+
     /// Strip `s`'s mesh level: the ladder's `level` with its faces doubled as the strip was.
     pub(super) fn strip_level(&self, s: usize, level: (usize, usize)) -> (usize, usize) {
-        if self.ladder_meshes {
+        if self.ladder {
             return level;
         }
-        let r = self.strip_refine[s];
+        let r = self.strips[s];
         (level.0 << r, level.1 << r)
     }
 
-    /// Whether strip `s` is refined beyond the ladder's level.
-    pub(super) fn is_refined(&self, s: usize) -> bool {
-        self.strip_refine[s] > 0
+    /// Times strip `s` is doubled beyond the ladder's level.
+    pub(super) fn of_strip(&self, s: usize) -> u32 {
+        self.strips[s]
+    }
+
+    /// Whether any strip is doubled beyond the ladder's level.
+    pub(super) fn any_strip(&self) -> bool {
+        self.strips.iter().any(|&r| r > 0)
     }
 
     /// The bends' mesh level: the ladder's `level` with the faces doubled as the bends were.
     pub(super) fn bend_level(&self, level: (usize, usize)) -> (usize, usize) {
-        (level.0 << self.bend_refine, level.1 << self.bend_refine)
+        (level.0 << self.bends, level.1 << self.bends)
+    }
+
+    /// Every strip on the ladder's level (`on`) or on its own mesh.
+    pub(super) fn set_ladder(&mut self, on: bool) {
+        self.ladder = on;
+    }
+
+    /// Whether every strip is on the ladder's level whatever its own doublings.
+    pub(super) fn ladder(&self) -> bool {
+        self.ladder
     }
 
     /// Whether the bends' cantilevers may be doubled once more on top of `last`.
     fn may_refine_bends(&self, bends: &[BendTest], last: (usize, usize)) -> bool {
         let l = self.bend_level(last);
-        self.bend_refine < MAX_DOUBLINGS
+        self.bends < MAX_DOUBLINGS
             && bends.iter().all(|b| {
                 let (nx, ny) = super::thickness::bend_mesh((2 * l.0, 2 * l.1), b);
                 nx * ny <= MAX_FACES
@@ -122,7 +157,7 @@ impl Lab {
 
     /// Whether strip `s` may be doubled once more on top of `last`.
     fn may_refine(&self, strip: &Strip, s: usize, last: (usize, usize)) -> bool {
-        if self.strip_refine[s] >= MAX_DOUBLINGS {
+        if self.strips[s] >= MAX_DOUBLINGS {
             return false;
         }
         let l = self.strip_level(s, last);
@@ -168,7 +203,7 @@ fn strip_checks(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<StripCheck>,
 
 /// Whether strip `s` may be doubled once more on top of `last`.
 fn may_refine(f: &Fitter, s: usize, last: (usize, usize)) -> bool {
-    f.lab.may_refine(&f.ctx.prep.strips[s], s, last)
+    f.lab.meshes.may_refine(&f.ctx.prep.strips[s], s, last)
 }
 
 /// Refines every strip that misses its tolerance and refits the stages it belongs to (see the
@@ -270,7 +305,7 @@ pub(super) fn refine_for_check(
         .fold(0.0, f64::max);
     let angle_moved = check.angle_change_deg.unwrap_or(0.0);
     let bends = (bend_moved >= MESH_PARAM_TOL || angle_moved >= MESH_ANGLE_TOL_DEG)
-        && f.lab.may_refine_bends(&f.ctx.data.bend, last);
+        && f.lab.meshes.may_refine_bends(&f.ctx.data.bend, last);
     if todo.is_empty() && !bends {
         return Ok(false);
     }
@@ -284,7 +319,7 @@ pub(super) fn refine_for_check(
 /// Doubles the bends' cantilevers once more, with the note that says why (the check moves
 /// their thickness or rigidity by `bend_moved`, their drape angles by `angle_moved` degrees).
 fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_moved: f64) {
-    let from = f.lab.bend_level(last);
+    let from = f.lab.meshes.bend_level(last);
     let note = format!(
         "per-test mesh: the bends refined from the {}x{} level's cantilevers to the {}x{} one's (the mesh check moves their thickness or rigidity by {:.2} %, their drape angles by {:.3}°)",
         from.0,
@@ -296,7 +331,7 @@ fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_mov
     );
     f.journal.say(&note);
     f.journal.note(note);
-    f.lab.bend_refine += 1;
+    f.lab.meshes.bends += 1;
 }
 
 /// Doubles the meshes of the strips in `todo` (each with the reason, for the notes), then
@@ -311,7 +346,7 @@ fn double_and_refit(
 ) -> Result<(), FitError> {
     for (s, why) in todo {
         let strip = &f.ctx.prep.strips[*s];
-        let l = f.lab.strip_level(*s, last);
+        let l = f.lab.meshes.strip_level(*s, last);
         let from = strip_mesh(l, strip.width, strip.length);
         let to = strip_mesh((2 * l.0, 2 * l.1), strip.width, strip.length);
         let note = format!(
@@ -320,7 +355,7 @@ fn double_and_refit(
         );
         f.journal.say(&note);
         f.journal.note(note);
-        f.lab.strip_refine[*s] += 1;
+        f.lab.meshes.strips[*s] += 1;
     }
     let stages = &sets.own;
     let first = (0..stages.len())

@@ -3,6 +3,7 @@
 //! measured on them.
 
 use super::preprocess::interpolation_weights;
+use super::refine::Doublings;
 use super::{
     Context, FitError, FitOptions, FitStats, Fitted, RigKey, Work, FIT_RTOL, NEAR_ANGLE_DEG,
 };
@@ -55,19 +56,15 @@ pub(super) struct Lab {
     yarns: Option<YarnRule>,
     /// the yarn-to-shear ratio that sets new strips' β ([`Lab::pin_yarns`])
     yarn_ratio: Option<f64>,
-    /// times each strip's mesh is doubled beyond the ladder's level ([`super::refine`])
-    pub(super) strip_refine: Vec<u32>,
-    /// times the bends' meshes are doubled beyond the ladder's level ([`super::refine`])
-    pub(super) bend_refine: u32,
-    /// every strip on the ladder's level whatever its own refinement (cheap diagnostics)
-    pub(super) ladder_meshes: bool,
+    /// each test's mesh against the ladder's level ([`super::refine`])
+    pub(super) meshes: Doublings,
 }
 
 impl Lab {
     /// A cold lab for `strips` strips, none refined.
     pub(super) fn new(strips: usize) -> Self {
         Self {
-            strip_refine: vec![0; strips],
+            meshes: Doublings::new(strips),
             ..Self::default()
         }
     }
@@ -143,7 +140,7 @@ impl Lab {
         angle: f64,
         level: (usize, usize),
     ) -> Result<(RigKey, StripRig), FitError> {
-        let level = self.strip_level(s, level);
+        let level = self.meshes.strip_level(s, level);
         let strip = &ctx.prep.strips[s];
         let key = ctx.rig_key(s, angle, level);
         if let Some(rig) = self.rigs.remove(&key) {

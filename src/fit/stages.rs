@@ -322,11 +322,11 @@ impl Bench<'_, '_> {
             .iter()
             .map(|&s| {
                 let strip = &self.ctx.prep.strips[s];
-                if !self.lab.is_refined(s) {
+                if self.lab.meshes.of_strip(s) == 0 {
                     format!("{}°", strip.angle_deg)
                 } else {
                     let m = super::rigs::strip_mesh(
-                        self.lab.strip_level(s, level),
+                        self.lab.meshes.strip_level(s, level),
                         strip.width,
                         strip.length,
                     );

@@ -59,7 +59,7 @@ impl Lab {
         bends: &[BendTest],
         level: (usize, usize),
     ) -> Result<Vec<BendRig>, FitError> {
-        let mesh_level = self.bend_level(level);
+        let mesh_level = self.meshes.bend_level(level);
         let mut out = Vec::with_capacity(bends.len());
         for b in bends {
             let mesh = bend_mesh(mesh_level, b);
@@ -97,7 +97,7 @@ impl Lab {
         level: (usize, usize),
         rigs: Vec<BendRig>,
     ) {
-        let mesh_level = self.bend_level(level);
+        let mesh_level = self.meshes.bend_level(level);
         for (b, rig) in bends.iter().zip(rigs) {
             self.bend_cache
                 .insert(bend_key(b, bend_mesh(mesh_level, b)), rig);
@@ -234,7 +234,7 @@ pub(super) fn thickness_stage(
     if let super::map::A12Rule::Fixed(_) = ctx.a12 {
         ctx.a12.apply(&mut law);
     }
-    let mesh = lab.bend_level(level);
+    let mesh = lab.meshes.bend_level(level);
     let line = format!(
         "thickness stage, mesh {}×{}: τ = {:.4} mm, rms relative angle error {:.3} % ({} evaluations, {})",
         mesh.0,

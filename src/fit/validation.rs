@@ -113,7 +113,7 @@ impl Bench<'_, '_> {
             // its own is compared with itself, not with the ladder's mesh, and a node rig set
             // up on an earlier ladder level keeps that level's centre-rule β: either
             // difference is discretisation error, not interpolation error)
-            let own = self.lab.strip_level(s, level);
+            let own = self.lab.meshes.strip_level(s, level);
             let key = self.ctx.rig_key(s, strip.angle_deg, own);
             let node_rig = self.lab.warm_rig(&key);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
@@ -221,7 +221,7 @@ fn curve_outcome(
     );
     let strip = &bench.ctx.prep.strips[curve.strip];
     let mesh = super::rigs::strip_mesh(
-        bench.lab.strip_level(curve.strip, last),
+        bench.lab.meshes.strip_level(curve.strip, last),
         strip.width,
         strip.length,
     );
@@ -239,7 +239,7 @@ fn curve_outcome(
                 mesh.0,
                 mesh.1,
                 100.0 * err,
-                bench.lab.strip_refine[curve.strip],
+                bench.lab.meshes.of_strip(curve.strip),
                 super::refine::MAX_DOUBLINGS
             ));
         }
@@ -318,9 +318,9 @@ fn misalignment_check(
         .journal
         .say(&format!("report: misalignment diagnostic of {name}"));
     // a diagnostic: on the first level's strips, whatever this one's own mesh
-    bench.lab.ladder_meshes = true;
+    bench.lab.meshes.set_ladder(true);
     let found = bench.misalignment(m, c, bench.ctx.opts.ladder[0]);
-    bench.lab.ladder_meshes = false;
+    bench.lab.meshes.set_ladder(false);
     if let Some(d) = found {
         let (e, _) = bench.curve_error(m, c, curve.angle_deg + d, last)?;
         misalign = Some(d);
@@ -360,7 +360,7 @@ fn interpolation_note(bench: &mut Bench, m: &Fitted) {
         worst.1,
         bench.ctx.opts.ladder[0].0,
         bench.ctx.opts.ladder[0].1,
-        if bench.lab.strip_refine.iter().any(|&r| r > 0) && !bench.lab.ladder_meshes {
+        if bench.lab.meshes.any_strip() && !bench.lab.meshes.ladder() {
             ", strips refined on their own meshes there"
         } else {
             ""
@@ -390,7 +390,7 @@ fn bend_outcomes(
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
             bend.yarn_rule = bench.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
-            bend.mesh = super::thickness::bend_mesh(bench.lab.bend_level(last), b);
+            bend.mesh = super::thickness::bend_mesh(bench.lab.meshes.bend_level(last), b);
             let r = bend
                 .run(&m.material(bench.ctx.data))
                 .map_err(|source| FitError::Scene {

@@ -38,7 +38,7 @@ impl Bench<'_, '_> {
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
-        let own = if self.lab.strip_refine.iter().any(|&r| r > 0) {
+        let own = if self.lab.meshes.any_strip() {
             " (and every strip refined on its own mesh once more)"
         } else {
             ""
