@@ -406,7 +406,11 @@ struct Bench<'f, 'a> {
     evidence: &'f mut Evidence,
 }
 
-/// The fitter's working state.
+/// The fitter's working state, its parts each with one owner: the context is set up once;
+/// the material is written only where the pipeline and the ladder apply a stage's optimum;
+/// the lab's caches only by the lab, each test's mesh doublings only by `refine`; the evidence
+/// by the stages that leave it; the journal and the stats are the one record every stage
+/// writes to.
 struct Fitter<'a> {
     ctx: Context<'a>,
     /// progress lines, notes and the degree log

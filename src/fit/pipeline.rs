@@ -1,8 +1,10 @@
 //! The fit as its list of stages (Clyde et al. 2017 §5, extended): set-up, the homogeneous
 //! bootstrap, the multiresolution ladder of shell stages, the shear from captured shapes, each
 //! test's own mesh, the mesh check, and validation. Each stage is a function with its inputs
-//! and outputs in its signature; the [`Fitter`] carries the law being fitted, the warm strips
-//! and the notes, timings and progress lines that every stage adds to.
+//! and outputs in its signature: it is given the material it starts from and returns its
+//! optimum, which this module and the ladder apply to the [`Fitter`]'s material (`Fitted`);
+//! it solves in the lab and writes notes, timings and progress to the record it is lent
+//! ([`super::Bench`]).
 
 use super::journal::Journal;
 use super::map::{A12Rule, Direction, StageMap};
