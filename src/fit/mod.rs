@@ -221,18 +221,17 @@ impl FitStats {
     /// `stage`.
     pub(crate) fn time_stage(&mut self, stage: &str, t: Instant) {
         let s = t.elapsed().as_secs_f64();
-        let st = self;
-        let its = st.newton_iterations - st.counted;
-        st.counted = st.newton_iterations;
-        if let Some(e) = st.stage_seconds.iter_mut().find(|e| e.0 == stage) {
+        let its = self.newton_iterations - self.counted;
+        self.counted = self.newton_iterations;
+        if let Some(e) = self.stage_seconds.iter_mut().find(|e| e.0 == stage) {
             e.1 += s;
         } else {
-            st.stage_seconds.push((stage.to_string(), s));
+            self.stage_seconds.push((stage.to_string(), s));
         }
-        if let Some(e) = st.stage_iterations.iter_mut().find(|e| e.0 == stage) {
+        if let Some(e) = self.stage_iterations.iter_mut().find(|e| e.0 == stage) {
             e.1 += its;
         } else {
-            st.stage_iterations.push((stage.to_string(), its));
+            self.stage_iterations.push((stage.to_string(), its));
         }
     }
 
@@ -352,9 +351,9 @@ impl Evidence {
         (self.uncertainty.len(), self.linearised.len())
     }
 
-    /// Every fitted parameter's standard error at the final `law`: each tensile stage's last run at the law's
-    /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
-    /// or bending stage's.
+    /// Every fitted parameter's standard error at the final `law`: each tensile stage's last
+    /// run at the law's final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ),
+    /// then the thickness or bending stage's.
     fn final_uncertainty(&self, law: &Orthotropic) -> Vec<uncertainty::ParamError> {
         let mut out = Vec::new();
         for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
