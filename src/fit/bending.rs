@@ -9,15 +9,18 @@
 //! (Peirce; about 2 % off the heavy elastica), B = ρ g c³; the stage then fits the shell model's
 //! own drape angles with exact sensitivities ∂θ/∂B.
 
+use super::mesh_check::Linearised;
 use super::optim::{minimize, Evaluation};
-use super::{to_evaluation, FitError, Fitter, Work};
+use super::rigs::Lab;
+use super::thickness::{bend_evidence, drape_angles, BendFit};
+use super::uncertainty::ParamError;
+use super::{to_evaluation, Context, FitError, FitStats, Fitted, Work};
 use crate::assembly::STANDARD_GRAVITY;
 use crate::dataset::BendTest;
 use crate::material::bending::{bias_ratio, twist_following};
 use crate::material::{BendingRigidity, Orthotropic};
 use crate::scene::{BendRig, SceneError};
 use rayon::prelude::*;
-use std::time::Instant;
 
 /// How the bending is modelled (`fit --bending`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -67,128 +70,121 @@ fn start_rigidity(bends: &[BendTest], angle: f64, density: f64) -> f64 {
     (logs.iter().sum::<f64>() / logs.len().max(1) as f64).exp()
 }
 
-impl Fitter<'_> {
-    /// Warp and weft rigidities (and twist, with an off-axis bend) from the bend tests.
-    pub(super) fn bending_stage(
-        &mut self,
-        bends: &[BendTest],
-        level: (usize, usize),
-    ) -> Result<(), FitError> {
-        let t0 = Instant::now();
-        let density = self.data.areal_density.unwrap_or(0.1);
-        let ratio = bias_ratio(&self.law);
-        let off_axis = bends.iter().any(|b| !along(b, 90.0) && !along(b, 0.0));
-        let b0 = self.bending.unwrap_or_else(|| {
-            let (w, f) = (
-                start_rigidity(bends, 90.0, density),
-                start_rigidity(bends, 0.0, density),
-            );
-            BendingRigidity {
-                warp: w,
-                weft: f,
-                twist: twist_following(w, f, ratio),
-            }
-        });
-        let mut rigs = self.bend_rigs(bends, level)?;
-        // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
-        let rigidity = Rigidity {
-            b0,
-            off_axis,
-            ratio,
-        };
-        let n = rigidity.n();
-        let law = self.law.clone();
-        let mut p = vec![0.0; n];
-        let opts = self.stage_options(level, 1e-14, bends.len());
-        let mut problem = BendProblem {
-            rigs: &mut rigs,
-            bends,
-            nlaw: law.params().len(),
-            law,
-            tau: self.thickness,
-            rigidity,
-            evals: 0,
-            newton: 0,
-            seen: super::uncertainty::Seen::new(),
-        };
-        let rep = minimize(&mut p, &opts, |q: &[f64], jac: bool| problem.eval(q, jac)).map_err(
-            |source| FitError::Scene {
+/// The D1388 rigidities of the warp and weft bends, the twist following them at the bias
+/// `ratio`.
+fn start_rigidities(bends: &[BendTest], density: f64, ratio: f64) -> BendingRigidity {
+    let (w, f) = (
+        start_rigidity(bends, 90.0, density),
+        start_rigidity(bends, 0.0, density),
+    );
+    BendingRigidity {
+        warp: w,
+        weft: f,
+        twist: twist_following(w, f, ratio),
+    }
+}
+
+/// Warp and weft rigidities (and twist, with an off-axis bend) from the bend tests, from
+/// material `m`.
+pub(super) fn bending_stage(
+    ctx: &Context,
+    lab: &mut Lab,
+    stats: &mut FitStats,
+    m: &Fitted,
+    level: (usize, usize),
+) -> Result<BendFit, FitError> {
+    let bends = &ctx.data.bend;
+    let density = ctx.data.areal_density.unwrap_or(0.1);
+    let ratio = bias_ratio(&m.law);
+    let off_axis = bends.iter().any(|b| !along(b, 90.0) && !along(b, 0.0));
+    let b0 = m
+        .bending
+        .unwrap_or_else(|| start_rigidities(bends, density, ratio));
+    let mut rigs = lab.bend_rigs(ctx, m, bends, level)?;
+    // p = ln(B/B⁰) for warp, weft and (off-axis bends only) twist
+    let rigidity = Rigidity {
+        b0,
+        off_axis,
+        ratio,
+    };
+    let n = rigidity.n();
+    let law = m.law.clone();
+    let mut p = vec![0.0; n];
+    let opts = ctx.stage_options(level, 1e-14, bends.len());
+    let mut problem = BendProblem {
+        rigs: &mut rigs,
+        bends,
+        nlaw: law.params().len(),
+        law,
+        tau: m.thickness,
+        rigidity,
+        evals: 0,
+        newton: 0,
+        seen: super::uncertainty::Seen::new(),
+    };
+    let rep =
+        minimize(&mut p, &opts, |q: &[f64], jac: bool| problem.eval(q, jac)).map_err(|source| {
+            FitError::Scene {
                 stage: format!("bending stage on {}×{}", level.0, level.1),
                 source,
-            },
-        )?;
-        let (evals, newton, seen) = (problem.evals, problem.newton, problem.seen);
-        self.stats.record(Work::single_solves(evals, newton));
-        let b = rigidity.at(&p);
-        self.bending_errors(b, off_axis, &seen, &p, level);
-        self.bend_angles.clear();
-        for rig in &mut rigs {
-            rig.set_bending(Some(b));
-            let pt = rig.run(false).map_err(|source| FitError::Scene {
-                stage: "drape angles at the fitted rigidities".into(),
-                source,
-            })?;
-            self.bend_angles.push(pt.drape_angle_deg);
-            self.stats.record(Work::run(1, pt.report.iterations));
-        }
-        self.keep_bend_rigs(bends, level, rigs);
-        self.bending = Some(b);
-        let msg = format!(
-            "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
-            self.bend_level(level).0,
-            self.bend_level(level).1,
-            b.warp,
-            b.weft,
-            b.twist,
-            if off_axis { "fitted" } else { "assumed" },
-            100.0 * (rep.objective / bends.len() as f64).sqrt(),
-            rep.evaluations,
-            rep.stop
-        );
-        self.journal.say(&msg);
-        self.time_stage("bending", t0);
+            }
+        })?;
+    let (evals, newton, seen) = (problem.evals, problem.newton, problem.seen);
+    stats.record(Work::single_solves(evals, newton));
+    let b = rigidity.at(&p);
+    let (linearised, errors) = bending_errors(b, off_axis, &seen, &p, level);
+    let angles = drape_angles(&mut rigs, stats, "the fitted rigidities", |rig| {
+        rig.set_bending(Some(b));
         Ok(())
-    }
+    })?;
+    lab.keep_bend_rigs(bends, level, rigs);
+    let line = format!(
+        "bending stage, mesh {}×{}: B_warp = {:.4e}, B_weft = {:.4e}, B_twist = {:.4e} N·m ({}), rms relative angle error {:.3} % ({} evaluations, {})",
+        lab.meshes.bend_level(level).0,
+        lab.meshes.bend_level(level).1,
+        b.warp,
+        b.weft,
+        b.twist,
+        if off_axis { "fitted" } else { "assumed" },
+        100.0 * (rep.objective / bends.len() as f64).sqrt(),
+        rep.evaluations,
+        rep.stop
+    );
+    Ok(BendFit {
+        law: m.law.clone(),
+        thickness: m.thickness,
+        bending: Some(b),
+        angles,
+        linearised,
+        errors,
+        line,
+        stage: "bending",
+    })
+}
 
-    /// The bending stage's linearisation and standard errors at its optimum p (rigidities
-    /// `b`; the twist assumed without an off-axis bend).
-    fn bending_errors(
-        &mut self,
-        b: BendingRigidity,
-        off_axis: bool,
-        seen: &super::uncertainty::Seen,
-        p: &[f64],
-        level: (usize, usize),
-    ) {
-        let n = p.len();
-        let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
-        let values = [b.warp, b.weft, b.twist];
-        if let Some((_, j)) = super::uncertainty::at_optimum(seen, p) {
-            self.evidence
-                .linearised
-                .push(super::mesh_check::Linearised::bends(
-                    level,
-                    j,
-                    &names[..n],
-                    &values[..n],
-                ));
-        }
-        self.evidence.stage_errors = match super::uncertainty::at_optimum(seen, p) {
-            Some((r, j)) => super::uncertainty::log_errors(&names[..n], &values[..n], j, r),
-            None => Vec::new(),
-        };
-        if !off_axis {
-            self.evidence
-                .stage_errors
-                .push(super::uncertainty::ParamError {
-                    name: names[2].into(),
-                    value: b.twist,
-                    std_error: None,
-                    basis: "assumed",
-                    determined: false,
-                });
-        }
+/// The bending stage's linearisation and standard errors at its optimum p (rigidities `b`;
+/// the twist assumed without an off-axis bend).
+fn bending_errors(
+    b: BendingRigidity,
+    off_axis: bool,
+    seen: &super::uncertainty::Seen,
+    p: &[f64],
+    level: (usize, usize),
+) -> (Option<Linearised>, Vec<ParamError>) {
+    let n = p.len();
+    let names = ["bending_warp_n_m", "bending_weft_n_m", "bending_twist_n_m"];
+    let values = [b.warp, b.weft, b.twist];
+    let (linearised, mut errors) = bend_evidence(seen, p, level, &names[..n], &values[..n]);
+    if !off_axis {
+        errors.push(ParamError {
+            name: names[2].into(),
+            value: b.twist,
+            std_error: None,
+            basis: "assumed",
+            determined: false,
+        });
     }
+    (linearised, errors)
 }
 
 /// The rigidities at the stage's variables p = ln(B/B⁰): warp, weft and, with an off-axis

@@ -37,8 +37,9 @@
 //! do not call for it (README, "Tension–shear coupling").
 
 use super::map::StageMap;
-use super::{FitError, Fitter, StrainRange};
-use crate::material::{Law, ShearCoupling};
+use super::stages::{StageFit, StageMode, StageRun};
+use super::{Bench, Context, FitError, Fitted, StrainRange};
+use crate::material::{Law, Orthotropic, ShearCoupling};
 
 /// `fit --shear-coupling`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -104,100 +105,136 @@ impl CouplingOutcome {
 }
 
 /// Distinct strip angles among `strips`, to 0.01°.
-fn distinct_angles(f: &Fitter, strips: &[usize]) -> usize {
+fn distinct_angles(ctx: &Context, strips: &[usize]) -> usize {
     let mut a: Vec<i64> = strips
         .iter()
-        .map(|&s| (100.0 * f.prep.strips[s].angle_deg).round() as i64)
+        .map(|&s| (100.0 * ctx.prep.strips[s].angle_deg).round() as i64)
         .collect();
     a.sort_unstable();
     a.dedup();
     a.len()
 }
 
-impl Fitter<'_> {
-    /// Whether the law's tangent is positive definite along every strip's homogeneous strain
-    /// path to twice its largest elongation (20 points each; module doc).
-    fn convex_along(&self, strips: &[usize]) -> bool {
+impl Bench<'_, '_> {
+    /// Whether `law`'s tangent is positive definite along every strip's homogeneous strain
+    /// path (at thickness `tau`) to twice its largest elongation (20 points each; module doc).
+    fn convex_along(&self, law: &Orthotropic, tau: f64, strips: &[usize]) -> bool {
         strips.iter().all(|&s| {
-            let st = &self.prep.strips[s];
+            let st = &self.ctx.prep.strips[s];
             let top = 2.0 * st.nodes.last().copied().unwrap_or(0.0);
             let dl: Vec<f64> = (1..=20).map(|i| top * i as f64 / 20.0).collect();
             let path = super::bootstrap::homogeneous_curve(
-                &self.law,
+                law,
                 st.angle_deg,
                 st.width,
                 st.length,
-                self.thickness,
+                tau,
                 &dl,
                 false,
             );
             path.is_ok_and(|pts| {
                 pts.iter().all(|p| {
                     let e = nalgebra::Vector3::from(p.strain);
-                    self.law
-                        .response(&e)
+                    law.response(&e)
                         .is_ok_and(|r| r.tangent.cholesky().is_some())
                 })
             })
         })
     }
 
-    /// The coupling's trial on the first level (module doc); `err` and `range` are the
-    /// separable shear stage's shape error and strain range. Returns the stage's map for the
-    /// later levels (coupled if kept) and the shape error and range that stand.
+    /// The coupling's trial on the first level (module doc); `fit` is the separable shear
+    /// stage's from material `m`. Returns the stage's map for the later levels (coupled if
+    /// kept), the fit that stands and what became of the coupling.
     pub(super) fn coupling_trial(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
-        err: f64,
-        range: Option<StrainRange>,
-    ) -> Result<(StageMap, f64, Option<StrainRange>), FitError> {
-        let mode = self.opts.shear_coupling;
-        let angles = distinct_angles(self, strips);
+        fit: StageFit,
+    ) -> Result<(StageMap, StageFit, CouplingOutcome), FitError> {
+        let mode = self.ctx.opts.shear_coupling;
+        let angles = distinct_angles(self.ctx, strips);
         if mode == CouplingMode::Off || strips.is_empty() {
-            self.coupling = CouplingOutcome::Off;
-            return Ok((map, err, range));
+            return Ok((map, fit, CouplingOutcome::Off));
         }
         if mode == CouplingMode::Auto && angles < 2 {
-            self.coupling = CouplingOutcome::NotTried;
             self.journal.degree(format!(
                 "bias: tension–shear coupling not tried: {angles} off-axis angle fitted (it needs two or more)"
             ));
-            return Ok((map, err, range));
+            return Ok((map, fit, CouplingOutcome::NotTried));
         }
         let coupled = StageMap {
             coupling: true,
             ..map
         };
-        let saved = (
-            self.law.clone(),
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
-        self.law.coupling = Some(ShearCoupling {
+        let saved = self.evidence.marks();
+        let mut law = fit.law.clone();
+        law.coupling = Some(ShearCoupling {
             warp: 0.0,
             weft: 0.0,
         });
+        let from = Fitted { law, ..m.clone() };
         self.journal
             .say("bias: refitting with the tension–shear coupling free");
         let without = StageErrors {
-            shape: err,
-            rms: self.stage_rms,
+            shape: fit.shape,
+            rms: fit.rms,
         };
-        self.screened = None;
-        let screen = (mode == CouplingMode::Auto).then_some((without.shape, without.rms));
-        let run = self.shell_stage(coupled, strips, level, true, super::StageMode::Full, screen);
-        let gain = self.opts.degree_gain;
-        let outcome = match run {
-            Ok(Some((shape, r))) => {
+        let stage_mode = match mode {
+            CouplingMode::Auto => StageMode::Screened {
+                shape: without.shape,
+                rms: without.rms,
+            },
+            _ => StageMode::Full,
+        };
+        let run = self.shell_stage(&from, coupled, strips, level, true, stage_mode);
+        let outcome = self.judge(run, without, fit.range, (m.thickness, strips));
+        match outcome {
+            Ok((with, stands)) => {
+                let c = stands.law.coupling.expect("the coupled stage sets κ");
+                self.journal.log_degree(format!(
+                    "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
+                    level.0, level.1, c.warp, c.weft
+                ));
+                Ok((coupled, stands, CouplingOutcome::Kept { without, with }))
+            }
+            Err(rejected) => {
+                if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
+                    self.journal.log_degree(format!(
+                        "bias: tension–shear coupling not kept on {}×{}: {why} ({without} -> {with})",
+                        level.0, level.1
+                    ));
+                }
+                self.evidence.uncertainty.truncate(saved.0);
+                self.evidence.linearised.truncate(saved.1);
+                Ok((map, fit, rejected))
+            }
+        }
+    }
+
+    /// The coupled stage's `run` judged against the separable stage's errors `without`
+    /// (module doc; `tau` the thickness its law is checked at): the errors and the fit that
+    /// stand (with the separable `range` where the run has none), or why the coupling is not
+    /// kept.
+    fn judge(
+        &self,
+        run: Result<StageRun, FitError>,
+        without: StageErrors,
+        range: Option<StrainRange>,
+        (tau, strips): (f64, &[usize]),
+    ) -> Result<(StageErrors, StageFit), CouplingOutcome> {
+        let mode = self.ctx.opts.shear_coupling;
+        let gain = self.ctx.opts.degree_gain;
+        match run {
+            Ok(StageRun::Fitted(coupled_fit)) => {
                 let with = StageErrors {
-                    shape,
-                    rms: self.stage_rms,
+                    shape: coupled_fit.shape,
+                    rms: coupled_fit.rms,
                 };
                 let pays = with.shape <= gain * without.shape
                     || (with.rms <= gain * without.rms && with.shape <= without.shape);
-                let why = if !self.convex_along(strips) {
+                let why = if !self.convex_along(&coupled_fit.law, tau, strips) {
                     Some("the coupled law's tangent is not positive definite along the strips' strain paths (to twice the tested elongation)".to_string())
                 } else if mode == CouplingMode::Auto && !pays {
                     Some(format!(
@@ -208,13 +245,19 @@ impl Fitter<'_> {
                     None
                 };
                 match why {
-                    None => Ok((with, r.or(range))),
+                    None => Ok((
+                        with,
+                        StageFit {
+                            range: coupled_fit.range.or(range),
+                            ..*coupled_fit
+                        },
+                    )),
                     Some(why) => Err(CouplingOutcome::Rejected { without, with, why }),
                 }
             }
-            Ok(None) => {
+            Ok(StageRun::GivenUp(screened)) => {
                 // screened out at its space-mapped start
-                let (shape, rms) = self.screened.unwrap_or((f64::NAN, f64::NAN));
+                let (shape, rms) = screened.unwrap_or((f64::NAN, f64::NAN));
                 Err(CouplingOutcome::Rejected {
                     without,
                     with: StageErrors { shape, rms },
@@ -232,30 +275,6 @@ impl Fitter<'_> {
                 },
                 why: format!("its fit failed ({e})"),
             }),
-        };
-        match outcome {
-            Ok((with, r)) => {
-                let c = self.law.coupling.expect("the coupled stage sets κ");
-                self.log_degree(format!(
-                    "bias: tension–shear coupling kept on {}×{} over {angles} off-axis angles: {without} -> {with} (κ1 = {:.3}, κ2 = {:.3})",
-                    level.0, level.1, c.warp, c.weft
-                ));
-                self.coupling = CouplingOutcome::Kept { without, with };
-                Ok((coupled, with.shape, r))
-            }
-            Err(rejected) => {
-                if let CouplingOutcome::Rejected { with, why, .. } = &rejected {
-                    self.log_degree(format!(
-                        "bias: tension–shear coupling not kept on {}×{}: {why} ({without} -> {with})",
-                        level.0, level.1
-                    ));
-                }
-                self.law = saved.0;
-                self.evidence.uncertainty.truncate(saved.1);
-                self.evidence.linearised.truncate(saved.2);
-                self.coupling = rejected;
-                Ok((map, err, range))
-            }
         }
     }
 }

@@ -21,12 +21,11 @@
 //! The better of the two (shape error) is judged; the other's records are dropped.
 
 use super::map::{var_to_beta, StageMap, BETA_MAX};
-use super::stages::StageMode;
-use super::{FitError, Fitter, StrainRange};
-use crate::material::Orthotropic;
+use super::stages::{StageFit, StageMode};
+use super::{Bench, FitError, Fitted};
 
-/// A finished trial of one degree: (shape error, law, strain range, rms error).
-type Trial = (f64, Orthotropic, Option<StrainRange>, f64);
+/// A finished trial of one degree.
+type Trial = StageFit;
 
 /// The second start's new term: twice the stiffest old term's bend β = α·x̂, at least 0.5
 /// (η′ rising by e^0.5 over the tested range) and at most half the bound.
@@ -39,32 +38,34 @@ pub(super) fn stiff_beta(map: StageMap, prev: &[f64]) -> f64 {
     (2.0 * stiffest).clamp(0.5, 0.5 * BETA_MAX)
 }
 
-impl Fitter<'_> {
-    /// Degree choice on the shell model (module doc): degree d + 1 is kept only when it
-    /// lowers the shape error by the degree gain and is plausible.
+impl Bench<'_, '_> {
+    /// Degree choice on the shell model from material `m` (module doc): degree d + 1 is kept
+    /// only when it lowers the shape error by the degree gain and is plausible. The kept
+    /// degree's fit.
     pub(super) fn shell_degree_ladder(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         candidates: &[Vec<f64>],
-    ) -> Result<(f64, Option<StrainRange>), FitError> {
-        let base = self.law.clone();
+    ) -> Result<StageFit, FitError> {
         let mut best: Option<Trial> = None;
         for (i, cand) in candidates.iter().enumerate() {
             let degree = i + 1;
             let trial = match &best {
                 None => {
-                    self.law = base.clone();
-                    map.decode(cand, &mut self.law);
-                    let run = self.shell_stage(map, strips, level, true, StageMode::Full, None)?;
-                    let (err, range) = run.expect("a stage that raises no degree always runs");
-                    (err, self.law.clone(), range, self.stage_rms)
+                    let mut law = m.law.clone();
+                    map.decode(cand, &mut law);
+                    let from = Fitted { law, ..m.clone() };
+                    let run = self.shell_stage(&from, map, strips, level, true, StageMode::Full)?;
+                    run.fitted()
+                        .expect("a stage that raises no degree always runs")
                 }
-                Some(prev) => match self.raise_degree(map, strips, level, cand, prev) {
+                Some(prev) => match self.raise_degree(m, map, strips, level, cand, prev) {
                     Ok(Some(t)) => t,
                     Ok(None) => {
-                        self.log_degree(format!(
+                        self.journal.log_degree(format!(
                             "{}: degree {} kept: neither start of degree {degree} found a better law",
                             map.dir.name(),
                             degree - 1
@@ -72,7 +73,7 @@ impl Fitter<'_> {
                         break;
                     }
                     Err(e) => {
-                        self.log_degree(format!(
+                        self.journal.log_degree(format!(
                             "{}: degree {degree} failed on the shell ({e}); degree {} kept",
                             map.dir.name(),
                             degree - 1
@@ -81,31 +82,16 @@ impl Fitter<'_> {
                     }
                 },
             };
-            self.law = trial.1.clone();
             self.journal.degree(format!(
                 "{}: degree {degree}, shape error {:.3} % (shell, {}×{})",
                 map.dir.name(),
-                100.0 * trial.0,
+                100.0 * trial.shape,
                 level.0,
                 level.1
             ));
             if let Some(prev) = &best {
-                let why = if map.eta(&self.law).degree() < degree {
-                    Some("came out with a term too small to matter".to_string())
-                } else {
-                    super::plausible::implausible(&self.law, map, trial.2.as_ref())
-                };
-                let why = why.or_else(|| {
-                    (self.opts.fixed_degree.is_none() && trial.0 > self.opts.degree_gain * prev.0)
-                        .then(|| {
-                            format!(
-                                "lowers the shape error by less than {:.0} %",
-                                100.0 * (1.0 - self.opts.degree_gain)
-                            )
-                        })
-                });
-                if let Some(why) = why {
-                    self.log_degree(format!(
+                if let Some(why) = self.not_kept(map, degree, &trial, prev) {
+                    self.journal.log_degree(format!(
                         "{}: degree {} kept: degree {degree} {why}",
                         map.dir.name(),
                         degree - 1
@@ -113,21 +99,43 @@ impl Fitter<'_> {
                     break;
                 }
             }
-            let good = trial.0 <= self.opts.degree_good;
+            let good = trial.shape <= self.ctx.opts.degree_good;
             best = Some(trial);
-            if self.opts.fixed_degree.is_none() && good {
+            if self.ctx.opts.fixed_degree.is_none() && good {
                 self.journal.degree(format!(
                     "{}: degree {degree} kept: error below {:.2} %",
                     map.dir.name(),
-                    100.0 * self.opts.degree_good
+                    100.0 * self.ctx.opts.degree_good
                 ));
                 break;
             }
         }
-        let (err, law, range, rms) = best.expect("one candidate at least");
-        self.law = law;
-        self.stage_rms = rms;
-        Ok((err, range))
+        Ok(best.expect("one candidate at least"))
+    }
+
+    /// Why the trial of `degree` is not kept over degree d's `prev` (module doc), if it is not.
+    fn not_kept(
+        &self,
+        map: StageMap,
+        degree: usize,
+        trial: &Trial,
+        prev: &Trial,
+    ) -> Option<String> {
+        let why = if map.eta(&trial.law).degree() < degree {
+            Some("came out with a term too small to matter".to_string())
+        } else {
+            super::plausible::implausible(&trial.law, map, trial.range.as_ref())
+        };
+        why.or_else(|| {
+            (self.ctx.opts.fixed_degree.is_none()
+                && trial.shape > self.ctx.opts.degree_gain * prev.shape)
+                .then(|| {
+                    format!(
+                        "lowers the shape error by less than {:.0} %",
+                        100.0 * (1.0 - self.ctx.opts.degree_gain)
+                    )
+                })
+        })
     }
 
     /// Degree d + 1 from degree d's trial `prev`: the mapped start, then, when that does not
@@ -135,27 +143,29 @@ impl Fitter<'_> {
     /// optimum.
     fn raise_degree(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         cand: &[f64],
         prev: &Trial,
     ) -> Result<Option<Trial>, FitError> {
-        let from = map.encode(&prev.1);
-        let fixed = self.opts.fixed_degree.is_some();
-        let marks = (
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
+        let from = map.encode(&prev.law);
+        let fixed = self.ctx.opts.fixed_degree.is_some();
+        let marks = self.evidence.marks();
         let beta = super::plausible::new_term_beta(map, &from, cand);
         let mode = if fixed {
             StageMode::RaiseAlways
         } else {
             StageMode::Raise
         };
-        let mapped = self.raised_trial(map, strips, level, (&prev.1, &from), beta, mode);
-        let gain = self.opts.degree_gain;
-        let pays = |t: &Trial| t.0 <= gain * prev.0;
+        let at_prev = Fitted {
+            law: prev.law.clone(),
+            ..m.clone()
+        };
+        let mapped = self.raised_trial(map, strips, level, (&at_prev, &from), beta, mode);
+        let gain = self.ctx.opts.degree_gain;
+        let pays = |t: &Trial| t.shape <= gain * prev.shape;
         let mapped = match mapped {
             Ok(Some(t)) if pays(&t) => return Ok(Some(t)),
             Ok(t) => t,
@@ -168,10 +178,7 @@ impl Fitter<'_> {
                 None
             }
         };
-        let between = (
-            self.evidence.uncertainty.len(),
-            self.evidence.linearised.len(),
-        );
+        let between = self.evidence.marks();
         let stiff = stiff_beta(map, &from);
         self.journal.say(&format!(
             "{}: degree {} again from a stiff new term (β = {stiff:.2}), by the shell's own iterations",
@@ -182,7 +189,7 @@ impl Fitter<'_> {
             map,
             strips,
             level,
-            (&prev.1, &from),
+            (&at_prev, &from),
             stiff,
             StageMode::RaiseDirect,
         );
@@ -196,39 +203,38 @@ impl Fitter<'_> {
             (Err(e), None) => return Err(e),
         };
         Ok(match (mapped, direct) {
-            (Some(m), Some(d)) if d.0 < m.0 => {
+            (Some(t), Some(d)) if d.shape < t.shape => {
                 // the mapped trial's records give way to the direct one's
                 self.evidence.uncertainty.drain(marks.0..between.0);
                 self.evidence.linearised.drain(marks.1..between.1);
                 Some(d)
             }
-            (Some(m), _) => {
+            (Some(t), _) => {
                 self.evidence.uncertainty.truncate(between.0);
                 self.evidence.linearised.truncate(between.1);
-                self.stage_rms = m.3;
-                Some(m)
+                Some(t)
             }
             (None, d) => d,
         })
     }
 
     /// One start of a raised degree: degree d's law (and its variables) with a new
-    /// zero-weight term at bend `beta`, fitted in `mode`; `None` when the mapped start gave
-    /// it up.
+    /// zero-weight term at bend `beta`, fitted in `mode`; `None` when the mapped start gave it
+    /// up. `m` is degree d's material, `from` its variables.
     fn raised_trial(
         &mut self,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
-        (law, from): (&Orthotropic, &[f64]),
+        (m, from): (&Fitted, &[f64]),
         beta: f64,
         mode: StageMode,
     ) -> Result<Option<Trial>, FitError> {
-        let mut law = law.clone();
+        let mut law = m.law.clone();
         map.decode(&map.raise(from, beta), &mut law);
-        self.law = law;
-        let run = self.shell_stage(map, strips, level, true, mode, None)?;
-        Ok(run.map(|(err, range)| (err, self.law.clone(), range, self.stage_rms)))
+        let from = Fitted { law, ..m.clone() };
+        let run = self.shell_stage(&from, map, strips, level, true, mode)?;
+        Ok(run.fitted())
     }
 }
 

@@ -14,47 +14,44 @@
 //! Each fallback taken is a note. When none solves, the error says what to try.
 
 use super::map::StageMap;
-use super::stages::StageMode;
-use super::{FitError, Fitter, StrainRange};
+use super::stages::{StageMode, StageRun};
+use super::{Bench, FitError, Fitted};
 use crate::material::Eta;
 
 /// What to try when a stage fails from every start, for the error message.
 const HINT: &str = "the stage failed from its start, from its law cut off where its stress stops rising and from a linear law; try `--max-degree 1`, `--strategy adaptive`, or `ks-fit check` on the dataset (units, toes, force_scale)";
 
-/// What a tensile stage returns: its shape error and strain range, `None` for a trial given up.
-type StageRun = Result<Option<(f64, Option<StrainRange>)>, FitError>;
-
-impl Fitter<'_> {
-    /// One tensile stage on the shell model (see [`Fitter::shell_stage_once`]), falling back
-    /// (module doc) where a full stage of the ladder fails to solve. Trials (raised degrees,
+impl Bench<'_, '_> {
+    /// One tensile stage on the shell model from material `m` (see
+    /// [`Bench::shell_stage_once`]), falling back (module doc) where a full stage of the
+    /// ladder fails to solve. Trials (raised degrees,
     /// screened or coupled stages) and the stiffness-alone stages fail as they are: their
     /// callers keep what they had.
     pub(super) fn shell_stage(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
         mode: StageMode,
-        screen: Option<(f64, f64)>,
-    ) -> StageRun {
-        let start = self.law.clone();
-        let run = self.shell_stage_once(map, strips, level, strain_range, mode, screen);
-        let falls_back = mode == StageMode::Full && screen.is_none() && !map.coupling;
+    ) -> Result<StageRun, FitError> {
+        let run = self.shell_stage_once(m, map, strips, level, strain_range, mode);
+        let falls_back = mode == StageMode::Full && !map.coupling;
         let (stage, source) = match run {
             Err(FitError::Scene { stage, source }) if falls_back => (stage, source),
             other => return other,
         };
         let maps = self.fallback_maps(map);
         for linear in [false, true] {
-            self.law = start.clone();
+            let mut law = m.law.clone();
             let mut changed = false;
-            for m in &maps {
-                let note = super::plausible::cut_before_fall(&mut self.law, *m);
-                changed |= self.law_note(note);
+            for other in &maps {
+                let note = super::plausible::cut_before_fall(&mut law, *other);
+                changed |= self.journal.law_note(note);
             }
-            if linear && map.eta(&self.law) != &Eta::linear() {
-                *map.eta_mut(&mut self.law) = Eta::linear();
+            if linear && map.eta(&law) != &Eta::linear() {
+                *map.eta_mut(&mut law) = Eta::linear();
                 changed = true;
             }
             if !changed {
@@ -70,11 +67,11 @@ impl Fitter<'_> {
             );
             self.journal.say(&note);
             self.journal.note(note);
-            if let Ok(done) = self.shell_stage_once(map, strips, level, strain_range, mode, None) {
+            let from = Fitted { law, ..m.clone() };
+            if let Ok(done) = self.shell_stage_once(&from, map, strips, level, strain_range, mode) {
                 return Ok(done);
             }
         }
-        self.law = start;
         Err(FitError::Stage {
             stage,
             source,
@@ -87,7 +84,7 @@ impl Fitter<'_> {
     /// strips, squared; a quarter of it for the shear).
     fn fallback_maps(&self, map: StageMap) -> Vec<StageMap> {
         use super::map::Direction;
-        let e2 = self.prep.strips.iter().map(|s| {
+        let e2 = self.ctx.prep.strips.iter().map(|s| {
             let e = super::green(s.nodes.last().copied().unwrap_or(0.0), s.length);
             e * e
         });

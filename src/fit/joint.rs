@@ -66,8 +66,11 @@ pub(super) fn stage_sets(opts: &FitOptions, own: Vec<Vec<usize>>, maps: &[StageM
 /// its yarn passes, started from the coarse shear law, left the shear stage at 0.68 % rms
 /// where the staged refit reached 0.34 %).
 pub(super) fn without_sweep_if_coupled(f: &mut Fitter, sets: &mut StageSets) {
-    let kept = matches!(f.coupling, super::coupling::CouplingOutcome::Kept { .. });
-    if kept && sets.joint.is_some() && f.opts.joint == Joint::Auto {
+    let kept = matches!(
+        f.fitted.coupling,
+        super::coupling::CouplingOutcome::Kept { .. }
+    );
+    if kept && sets.joint.is_some() && f.ctx.opts.joint == Joint::Auto {
         sets.joint = None;
         let note = "joint sweep not run (--joint auto): the tension–shear coupling was kept, and its shear stage fits the yarn and shear terms together (--joint on forces the sweep)".to_string();
         f.journal.say(&note);
@@ -75,28 +78,26 @@ pub(super) fn without_sweep_if_coupled(f: &mut Fitter, sets: &mut StageSets) {
     }
 }
 
-impl Fitter<'_> {
-    /// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
-    /// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
-    /// shear, or for a known stiffness.
-    pub(super) fn joint_stiffness(
-        &mut self,
-        map: StageMap,
-        k: usize,
-        sets: &StageSets,
-        level: (usize, usize),
-    ) -> Result<(), FitError> {
-        let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
-            return Ok(());
-        };
-        if strips.is_empty() {
-            return Ok(());
-        }
-        self.journal.say(&format!(
-            "{} stiffness again over every strip it moves (the joint sweep)",
-            map.dir.name()
-        ));
-        self.shell_stage(map, strips, level, false, StageMode::Stiffness, None)?;
-        Ok(())
+/// The joint sweep's pass of yarn stage `k` ([`super::Joint`]): its stiffness again over
+/// its own and every off-axis strip, η's shape held. Nothing without the sweep, for the
+/// shear, or for a known stiffness.
+pub(super) fn joint_stiffness(
+    f: &mut Fitter,
+    map: StageMap,
+    k: usize,
+    sets: &StageSets,
+    level: (usize, usize),
+) -> Result<(), FitError> {
+    let Some(strips) = sets.joint.as_ref().and_then(|j| j.get(k)) else {
+        return Ok(());
+    };
+    if strips.is_empty() {
+        return Ok(());
     }
+    f.journal.say(&format!(
+        "{} stiffness again over every strip it moves (the joint sweep)",
+        map.dir.name()
+    ));
+    super::ladder::refit(f, map, strips, level, false, StageMode::Stiffness)?;
+    Ok(())
 }

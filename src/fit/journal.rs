@@ -2,7 +2,7 @@
 //! started; the notes that the material file and the report carry; and the degree log (one
 //! line per direction and degree tried). Every stage writes through the fitter's one
 //! [`Journal`]; the stage timings live beside the solve counts in [`super::FitStats`]
-//! (`Fitter::time_stage`).
+//! ([`super::FitStats::time_stage`]).
 
 use std::time::Instant;
 
@@ -44,6 +44,20 @@ impl<'a> Journal<'a> {
     /// A line of the degree log.
     pub(super) fn degree(&mut self, line: String) {
         self.degree_log.push(line);
+    }
+
+    /// A line of the degree log, said as progress too.
+    pub(super) fn log_degree(&mut self, line: String) {
+        self.say(&line);
+        self.degree(line);
+    }
+
+    /// Says and notes a change a rule made to the law (`None`: no change); whether it did.
+    pub(super) fn law_note(&mut self, note: Option<String>) -> bool {
+        let Some(note) = note else { return false };
+        self.say(&note);
+        self.note(note);
+        true
     }
 
     /// Seconds since the fit started.

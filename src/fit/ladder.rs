@@ -6,6 +6,7 @@
 
 use super::map::StageMap;
 use super::mesh_check::MeshCheck;
+use super::stages::StageFit;
 use super::{FitError, Fitter, StageMode, StageSets};
 
 /// A stage whose determined quantities the last refinement moved by less than this is
@@ -22,7 +23,7 @@ pub(super) fn ladder(
     sets: &mut StageSets,
     shear_candidates: &[Vec<f64>],
 ) -> Result<Vec<(usize, usize)>, FitError> {
-    let opts = f.opts;
+    let opts = f.ctx.opts;
     let own = sets.own.clone();
     let strips = &own[..];
     let all: Vec<usize> = strips.iter().flatten().copied().collect();
@@ -38,7 +39,7 @@ pub(super) fn ladder(
                 break;
             }
         }
-        f.pin_yarns();
+        f.lab.pin_yarns(&f.fitted.law);
         if let Some(prev) = &previous {
             let (skip, check) = refinement_check(f, prev, &all, from, level)?;
             if let Some(note) = skip {
@@ -55,22 +56,17 @@ pub(super) fn ladder(
         if li == 0 && sets.joint.is_some() {
             // the joint sweep: each yarn stiffness over the strips it moves, then the shear
             // given them
-            f.joint_stiffness(maps[0], 0, sets, level)?;
-            f.joint_stiffness(maps[1], 1, sets, level)?;
+            super::joint::joint_stiffness(f, maps[0], 0, sets, level)?;
+            super::joint::joint_stiffness(f, maps[1], 1, sets, level)?;
             if !strips[2].is_empty() {
                 f.journal
                     .say("bias stage again, given the joint yarn stiffnesses");
-                f.shell_stage(maps[2], &strips[2], level, false, StageMode::Full, None)?;
+                refit(f, maps[2], &strips[2], level, false, StageMode::Full)?;
             }
         }
-        let data = f.data;
-        if f.own_bending {
-            f.bending_stage(&data.bend, level)?;
-        } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-            f.thickness_stage(&data.bend, level)?;
-        }
+        super::pipeline::bend_stage(f, level)?;
         if li + 1 < opts.ladder.len() {
-            previous = Some(f.fitted_forces(&all, level)?);
+            previous = Some(fitted_forces(f, &all, level)?);
         }
     }
     Ok(meshes)
@@ -84,13 +80,13 @@ fn skipped_by_estimate(
     from: (usize, usize),
     level: (usize, usize),
 ) -> bool {
-    let estimate = m.next_level(f.mesh_order());
+    let estimate = m.next_level(super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted));
     if estimate.passes() {
         let note = format!(
             "meshes from {}×{} on skipped: estimated to change the {}×{} fit's {} by {:.2} % and its curves by {:.2} % (the last refinement changed them by {:.2} % and {:.2} %, carried at order {}; below {})",
             level.0, level.1, from.0, from.1, m.parameter,
             100.0 * estimate.change, 100.0 * estimate.curve_change,
-            100.0 * m.change, 100.0 * m.curve_change, f.mesh_order(),
+            100.0 * m.change, 100.0 * m.curve_change, super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted),
             super::mesh_check::rules_in_words()
         );
         f.journal.say(&note);
@@ -111,8 +107,8 @@ fn refinement_check(
     from: (usize, usize),
     level: (usize, usize),
 ) -> Result<(Option<String>, Option<MeshCheck>), FitError> {
-    let opts = f.opts;
-    let now = f.fitted_forces(all, level)?;
+    let opts = f.ctx.opts;
+    let now = fitted_forces(f, all, level)?;
     let d: Vec<f64> = prev.iter().zip(&now).map(|(a, b)| (b - a) / b).collect();
     let change = super::mean_abs_finite(&d);
     f.journal.say(&format!(
@@ -126,7 +122,8 @@ fn refinement_check(
     // a doubling: the refit's parameter change, solved (the forces just solved
     // are the check's defect); otherwise the forces' change decides
     let check = if level == (2 * from.0, 2 * from.1) {
-        f.refit_change(from)?
+        let (mut bench, m) = f.bench();
+        bench.refit_change(m, from)?
     } else {
         None
     };
@@ -187,40 +184,88 @@ fn fit_level(
         if li > 0 && k < 2 && sets.joint.as_ref().is_some_and(|j| !j[k].is_empty()) {
             // with the joint sweep a finer level refits the yarn stiffness over the joint
             // strips; η's shape stays the first level's (the mesh check measures it)
-            f.joint_stiffness(maps[k], k, sets, level)?;
-            let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
-            f.law_note(note);
+            super::joint::joint_stiffness(f, maps[k], k, sets, level)?;
+            let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
+            f.journal.law_note(note);
             continue;
         }
-        let (err, mut range) = if k == 2 && li == 0 && shear_candidates.len() > 1 {
+        let fit = if k == 2 && li == 0 && shear_candidates.len() > 1 {
             // the homogeneous strip models a clamped bias strip poorly: choose the shear
             // degree on the shell model itself
-            f.shell_degree_ladder(maps[2], &strips[2], level, shear_candidates)?
+            let (mut bench, m) = f.bench();
+            let fit = bench.shell_degree_ladder(m, maps[2], &strips[2], level, shear_candidates)?;
+            f.fitted.law = fit.law.clone();
+            fit
         } else {
-            f.shell_stage(maps[k], &strips[k], level, li == 0, StageMode::Full, None)?
-                .expect("a stage that raises no degree always runs")
+            refit(f, maps[k], &strips[k], level, li == 0, StageMode::Full)?
         };
+        let mut range = fit.range;
         if k == 2 && li == 0 {
             // then, with the degree chosen, whether the tension–shear coupling pays
-            let (map, _, r) = f.coupling_trial(maps[2], &strips[2], level, err, range)?;
+            let (mut bench, m) = f.bench();
+            let (map, stands, outcome) =
+                bench.coupling_trial(m, maps[2], &strips[2], level, fit)?;
             maps[2] = map;
-            range = r;
+            range = stands.range;
+            f.fitted.law = stands.law;
+            f.fitted.coupling = outcome;
             super::joint::without_sweep_if_coupled(f, sets);
         }
         // cut-offs at 95 % of the largest strain the tests exercised, set on the first mesh
         if let Some((lo, hi)) = range {
             set_cutoff(f, k, lo, hi);
         }
-        let note = super::plausible::keep_rising(&mut f.law, maps[k].dir);
-        f.law_note(note);
+        let note = super::plausible::keep_rising(&mut f.fitted.law, maps[k].dir);
+        f.journal.law_note(note);
     }
     Ok(())
+}
+
+/// Forces of every fitted curve on a mesh level at the current material (for the
+/// ladder's change measure).
+fn fitted_forces(
+    f: &mut Fitter,
+    strips: &[usize],
+    level: (usize, usize),
+) -> Result<Vec<f64>, FitError> {
+    let jobs: Vec<(usize, f64)> = strips
+        .iter()
+        .map(|&s| (s, f.ctx.prep.strips[s].angle_deg))
+        .collect();
+    let nodes = f
+        .lab
+        .predict_many(&f.ctx, &f.fitted, &mut f.stats, &jobs, level)?;
+    let mut out = Vec::new();
+    for (&s, node) in strips.iter().zip(&nodes) {
+        for c in f.ctx.used_curves(&[s]) {
+            out.extend(f.ctx.curve_forces(c, node));
+        }
+    }
+    Ok(out)
+}
+
+/// A tensile stage from the fitted material, its optimum applied to the material.
+pub(super) fn refit(
+    f: &mut Fitter,
+    map: StageMap,
+    strips: &[usize],
+    level: (usize, usize),
+    strain_range: bool,
+    mode: StageMode,
+) -> Result<StageFit, FitError> {
+    let (mut bench, m) = f.bench();
+    let fit = bench
+        .shell_stage(m, map, strips, level, strain_range, mode)?
+        .fitted()
+        .expect("a stage that is not a trial always runs");
+    f.fitted.law = fit.law.clone();
+    Ok(fit)
 }
 
 /// Direction `k`'s cut-off at 95 % of the largest strain its tests exercised (`lo`, `hi`:
 /// the strain range, Ẽ11, Ẽ22, Ẽ12), said.
 fn set_cutoff(f: &mut Fitter, k: usize, lo: [f64; 3], hi: [f64; 3]) {
-    let law = &mut f.law;
+    let law = &mut f.fitted.law;
     let msg = match k {
         0 => {
             law.cutoffs.e11 = (0.0, 0.95 * hi[0]);

@@ -24,8 +24,9 @@
 
 mod notes;
 
-use super::{FitError, Fitter, Work};
-use crate::material::BendingRigidity;
+use super::rigs::Lab;
+use super::{Bench, Context, FitError, Fitted, Work};
+use crate::material::{BendingRigidity, Orthotropic};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
@@ -350,24 +351,24 @@ impl MeshCheck {
     }
 }
 
-impl Fitter<'_> {
-    /// The convergence order the fit's estimates of its strips' mesh errors assume
-    /// ([`order`] for its grading, yarn rule and the law's current yarn-to-shear ratio).
-    pub(super) fn mesh_order(&self) -> f64 {
-        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
-        order(self.opts.grading, self.yarns(), ratio)
-    }
+/// The convergence order the fit's estimates of its strips' mesh errors assume ([`order`] for
+/// its grading, the lab's yarn rule and the fitted law's yarn-to-shear ratio).
+pub(super) fn mesh_order(lab: &Lab, ctx: &Context, m: &Fitted) -> f64 {
+    let ratio = crate::material::Law::yarn_shear_ratio(&m.law);
+    order(ctx.opts.grading, lab.yarns(), ratio)
+}
 
-    /// The tensile stages' latest linearisations at the law's final degrees, then the bend
+impl Bench<'_, '_> {
+    /// The tensile stages' latest linearisations at `law`'s final degrees, then the bend
     /// stage's, all on `level`.
-    fn final_linearisations(&self, level: (usize, usize)) -> Vec<Linearised> {
+    fn final_linearisations(&self, law: &Orthotropic, level: (usize, usize)) -> Vec<Linearised> {
         use super::map::Direction;
         let mut out = Vec::new();
         for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
             let degree = match dir {
-                Direction::Warp => self.law.warp.degree(),
-                Direction::Weft => self.law.weft.degree(),
-                Direction::Shear => self.law.shear.degree(),
+                Direction::Warp => law.warp.degree(),
+                Direction::Weft => law.weft.degree(),
+                Direction::Shear => law.shear.degree(),
             };
             // the stage's linearisation on `level`, or on the coarser level of its last fit
             // (a stage the ladder did not refit)
@@ -388,12 +389,12 @@ impl Fitter<'_> {
         out
     }
 
-    /// Drape angles of every bend test on `level` at the current material.
-    fn drape_angles(&mut self, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
-        let data = self.data;
-        let mut rigs = self.bend_rigs(&data.bend, level)?;
+    /// Drape angles of every bend test on `level` at material `m`.
+    fn drape_angles(&mut self, m: &Fitted, level: (usize, usize)) -> Result<Vec<f64>, FitError> {
+        let data = self.ctx.data;
+        let mut rigs = self.lab.bend_rigs(self.ctx, m, &data.bend, level)?;
         let (law, tau, bending): (_, _, Option<BendingRigidity>) =
-            (self.law.clone(), self.thickness, self.bending);
+            (m.law.clone(), m.thickness, m.bending);
         let runs: Vec<_> = rigs
             .par_iter_mut()
             .map(|rig| {
@@ -407,7 +408,7 @@ impl Fitter<'_> {
             evaluations: runs.len(),
             ..Work::default()
         });
-        self.keep_bend_rigs(&data.bend, level, rigs);
+        self.lab.keep_bend_rigs(&data.bend, level, rigs);
         let runs: Vec<(f64, usize)> =
             runs.into_iter()
                 .collect::<Result<Vec<_>, _>>()
@@ -424,31 +425,34 @@ impl Fitter<'_> {
         Ok(runs.into_iter().map(|r| r.0).collect())
     }
 
-    /// The refit change from `from` to the mesh twice as fine, solved there (the ladder's
-    /// test of whether that level is needed); `None` when no stage has a linearisation.
+    /// The refit change of material `m` from `from` to the mesh twice as fine, solved there
+    /// (the ladder's test of whether that level is needed); `None` when no stage has a
+    /// linearisation.
     pub(super) fn refit_change(
         &mut self,
+        m: &Fitted,
         from: (usize, usize),
     ) -> Result<Option<MeshCheck>, FitError> {
-        let errors = self.final_uncertainty();
+        let errors = self.evidence.final_uncertainty(&m.law);
         let determined = |name: &str| {
             errors
                 .iter()
                 .find(|e| e.name == name)
                 .is_none_or(|e| e.determined)
         };
-        self.mesh_check(from, MeshCheckMode::Fine, &determined)
+        self.mesh_check(m, from, MeshCheckMode::Fine, &determined)
     }
 
-    /// The mesh check of the fit on `last` (see the module doc); `determined` says which
-    /// parameters count.
+    /// The mesh check of material `m` fitted on `last` (see the module doc); `determined`
+    /// says which parameters count.
     pub(super) fn mesh_check(
         &mut self,
+        m: &Fitted,
         last: (usize, usize),
         mode: MeshCheckMode,
         determined: &dyn Fn(&str) -> bool,
     ) -> Result<Option<MeshCheck>, FitError> {
-        let lins = self.final_linearisations(last);
+        let lins = self.final_linearisations(&m.law, last);
         let coarse = ((last.0 / 2).max(1), (last.1 / 2).max(1));
         if lins.is_empty() || mode == MeshCheckMode::Off || coarse == last {
             return Ok(None);
@@ -457,7 +461,7 @@ impl Fitter<'_> {
         // the defect towards the solved mesh, and the factor that makes it the one to `finer`
         let (solved_on, factor) = match mode {
             MeshCheckMode::Fine => (finer, 1.0),
-            _ => (coarse, -(2f64.powf(-self.mesh_order()))),
+            _ => (coarse, -(2f64.powf(-mesh_order(self.lab, self.ctx, m)))),
         };
         self.journal.say(&format!(
             "mesh check: every fitted strip and bend again on {}x{}",
@@ -468,8 +472,8 @@ impl Fitter<'_> {
         let mut changes: Vec<(String, f64, bool)> = Vec::new();
         for lin in &lins {
             let (dr, labels, scale) = match &lin.probe {
-                Probe::Tensile(strips) => self.tensile_defect(strips, last, solved_on)?,
-                Probe::Bends => self.bend_defect(lin, solved_on, factor, &changes)?,
+                Probe::Tensile(strips) => self.tensile_defect(m, strips, last, solved_on)?,
+                Probe::Bends => self.bend_defect(m, lin, solved_on, factor, &changes)?,
             };
             let dr: Vec<f64> = match lin.probe {
                 Probe::Tensile(_) => dr.iter().map(|v| factor * v).collect(),
@@ -501,14 +505,21 @@ impl Fitter<'_> {
     #[allow(clippy::type_complexity)]
     fn bend_defect(
         &mut self,
+        m: &Fitted,
         lin: &Linearised,
         solved_on: (usize, usize),
         factor: f64,
         changes: &[(String, f64, bool)],
     ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
-        let at_last = self.bend_angles.clone();
-        let fine = self.drape_angles(solved_on)?;
-        let targets: Vec<f64> = self.data.bend.iter().map(|b| b.drape_angle_deg).collect();
+        let at_last = self.evidence.bend_angles.clone();
+        let fine = self.drape_angles(m, solved_on)?;
+        let targets: Vec<f64> = self
+            .ctx
+            .data
+            .bend
+            .iter()
+            .map(|b| b.drape_angle_deg)
+            .collect();
         let mut dr: Vec<f64> = (0..fine.len())
             .map(|k| factor * (fine[k] - at_last[k]) / targets[k])
             .collect();
@@ -517,18 +528,19 @@ impl Fitter<'_> {
             // stages move a·τ; J is ∂r/∂ln τ at fixed a·τ, i.e. 2 ∂r/∂ln B
             let of = |key: &str| changes.iter().find(|c| c.0 == key).map_or(0.0, |c| c.1);
             let (warp, weft) = (of("a11_pa"), of("a22_pa"));
-            for (k, b) in self.data.bend.iter().enumerate().take(dr.len()) {
-                let m = if (b.angle_deg - 90.0).abs() < 1e-9 {
+            for (k, b) in self.ctx.data.bend.iter().enumerate().take(dr.len()) {
+                let moved = if (b.angle_deg - 90.0).abs() < 1e-9 {
                     warp
                 } else if b.angle_deg.abs() < 1e-9 {
                     weft
                 } else {
                     0.5 * (warp + weft)
                 };
-                dr[k] += 0.5 * lin.j[(k, 0)] * m;
+                dr[k] += 0.5 * lin.j[(k, 0)] * moved;
             }
         }
         let labels = self
+            .ctx
             .data
             .bend
             .iter()
@@ -536,36 +548,39 @@ impl Fitter<'_> {
         Ok((dr, labels.collect(), targets))
     }
 
-    /// Δr of the tensile residuals over `strips` from `last` to `finer` at the fitted
-    /// material, with a label per curve and the curves' point counts.
+    /// Δr of the tensile residuals over `strips` from `last` to `finer` at material `m`, with
+    /// a label per curve and the curves' point counts.
     #[allow(clippy::type_complexity)]
     fn tensile_defect(
         &mut self,
+        m: &Fitted,
         strips: &[usize],
         last: (usize, usize),
         finer: (usize, usize),
     ) -> Result<(Vec<f64>, Vec<String>, Vec<f64>), FitError> {
         let jobs: Vec<(usize, f64)> = strips
             .iter()
-            .map(|&s| (s, self.prep.strips[s].angle_deg))
+            .map(|&s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
-        let (coarse, fine) = self.predict_pair(&jobs, last, finer)?;
+        let (coarse, fine) =
+            self.lab
+                .predict_pair(self.ctx, m, self.stats, &jobs, (last, finer))?;
         let (mut dr, mut labels) = (Vec::new(), Vec::new());
         for (i, &s) in strips.iter().enumerate() {
-            for c in self.used_curves(&[s]) {
+            for c in self.ctx.used_curves(&[s]) {
                 let (a, b) = (
-                    self.curve_forces(c, &coarse[i]),
-                    self.curve_forces(c, &fine[i]),
+                    self.ctx.curve_forces(c, &coarse[i]),
+                    self.ctx.curve_forces(c, &fine[i]),
                 );
-                let points = &self.prep.curves[c].points;
+                let points = &self.ctx.prep.curves[c].points;
                 let w = 1.0 / (points.len() as f64).sqrt();
-                for ((m, fa), fb) in points.iter().zip(&a).zip(&b) {
+                for ((pt, fa), fb) in points.iter().zip(&a).zip(&b) {
                     // a point excluded on either mesh (a saddle) has no defect to carry
-                    let d = w * self.prep.misfit.change(*fa, *fb, m.1);
+                    let d = w * self.ctx.prep.misfit.change(*fa, *fb, pt.1);
                     dr.push(if d.is_finite() { d } else { 0.0 });
                 }
-                let test = self.prep.curves[c].test;
-                labels.push(self.data.tensile[test].curve.display().to_string());
+                let test = self.ctx.prep.curves[c].test;
+                labels.push(self.ctx.data.tensile[test].curve.display().to_string());
             }
         }
         Ok((dr, labels, Vec::new()))

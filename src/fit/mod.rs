@@ -79,7 +79,7 @@ pub mod verdict;
 
 use crate::dataset::FabricDataset;
 use crate::material::{BendingRigidity, FabricMaterial, Orthotropic};
-use crate::scene::{SceneError, StripRig};
+use crate::scene::SceneError;
 pub use bending::BendingMode;
 use map::{A12Rule, Direction};
 use measures::{green, mean_abs, mean_abs_finite, shape_error, to_evaluation};
@@ -92,7 +92,7 @@ pub use pipeline::fit;
 use preprocess::{Prepared, Strip};
 pub use preprocess::{RepeatMode, ToeMode};
 pub use refine::{TestMeshes, MAX_DOUBLINGS as REFINE_DOUBLINGS, MAX_FACES as REFINE_MAX_FACES};
-use std::{collections::HashMap, time::Instant};
+use std::time::Instant;
 use tolerances::{FIT_RTOL, NEAR_ANGLE_DEG, POLISH_XTOL, TRIAL_RETRY_ITERATIONS};
 
 /// The fit could not be done.
@@ -217,6 +217,24 @@ impl Work {
 }
 
 impl FitStats {
+    /// Adds the seconds since `t`, and the Newton iterations since the last timed stage, to
+    /// `stage`.
+    pub(crate) fn time_stage(&mut self, stage: &str, t: Instant) {
+        let s = t.elapsed().as_secs_f64();
+        let its = self.newton_iterations - self.counted;
+        self.counted = self.newton_iterations;
+        if let Some(e) = self.stage_seconds.iter_mut().find(|e| e.0 == stage) {
+            e.1 += s;
+        } else {
+            self.stage_seconds.push((stage.to_string(), s));
+        }
+        if let Some(e) = self.stage_iterations.iter_mut().find(|e| e.0 == stage) {
+            e.1 += its;
+        } else {
+            self.stage_iterations.push((stage.to_string(), its));
+        }
+    }
+
     /// Adds a stage's or a run's solver work to the totals.
     pub(crate) fn record(&mut self, w: Work) {
         self.evaluations += w.evaluations;
@@ -275,21 +293,6 @@ fn is_determined(uncertainty: &[uncertainty::ParamError], name: &str) -> bool {
         .is_none_or(|e| e.determined)
 }
 
-/// The virtual lab a fit keeps warm across its stages ([`rigs`], [`thickness`]).
-#[derive(Default)]
-struct WarmLab {
-    /// strips already set up, warm
-    pub(super) rigs: HashMap<RigKey, StripRig>,
-    /// cantilevers already set up, warm ([`Fitter::bend_rigs`])
-    pub(super) bend_cache: HashMap<thickness::BendKey, crate::scene::BendRig>,
-    /// node forces already predicted, by strip and parameter bits
-    pub(super) predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
-    /// the yarn rule of every solve, once decided ([`Fitter::yarns`])
-    pub(super) yarns: Option<crate::assembly::YarnRule>,
-    /// the yarn-to-shear ratio that sets new strips' β ([`Fitter::pin_yarns`])
-    pub(super) yarn_ratio: Option<f64>,
-}
-
 /// What the stages leave at their optima for the standard errors ([`uncertainty`]) and the
 /// mesh check ([`mesh_check`]).
 #[derive(Default)]
@@ -303,82 +306,66 @@ struct Evidence {
     /// the refit change the ladder solves at its last level when it stops there (the finer
     /// level solved): the final mesh check, solved rather than estimated
     pub(super) ladder_check: Option<MeshCheck>,
+    /// drape angles of the bend tests at the last thickness or bending stage's result
+    pub(super) bend_angles: Vec<f64>,
 }
 
-/// The fitter's working state.
-struct Fitter<'a> {
-    data: &'a FabricDataset,
-    opts: &'a FitOptions,
-    /// progress lines, notes and the degree log
-    journal: journal::Journal<'a>,
-    stats: FitStats,
+/// The material being fitted: the stages' optima, applied in the order the stages run.
+#[derive(Clone)]
+struct Fitted {
     law: Orthotropic,
     thickness: f64,
-    a12: A12Rule,
-    prep: Prepared,
-    /// drape angles of the bend tests at the last thickness or bending stage's result
-    bend_angles: Vec<f64>,
-    /// the bends fit rigidities of their own (`--bending`) rather than the thickness
-    own_bending: bool,
-    /// those rigidities, once fitted
+    /// the bends' own rigidities (`--bending`), once fitted
     bending: Option<BendingRigidity>,
-    /// what the stages leave for the standard errors and the mesh check
-    evidence: Evidence,
-    /// times the bends' meshes are doubled beyond the ladder's level ([`refine`])
-    bend_refine: u32,
-    /// every strip on the ladder's level whatever its own refinement (cheap diagnostics)
-    ladder_meshes: bool,
-    /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
-    lab: WarmLab,
     /// what the tension–shear coupling's trial decided ([`coupling`])
     coupling: coupling::CouplingOutcome,
-    /// the rms relative error of the last tensile stage run (of the kept degree after a
-    /// degree ladder)
-    stage_rms: f64,
-    /// the shape and rms errors at a screened trial's mapped start, when it is given up there
-    screened: Option<(f64, f64)>,
 }
 
-impl Fitter<'_> {
-    /// Says and notes a change a rule made to the law (`None`: no change); whether it did.
-    fn law_note(&mut self, note: Option<String>) -> bool {
-        let Some(note) = note else { return false };
-        self.journal.say(&note);
-        self.journal.note(note);
-        true
-    }
-
-    fn material(&self) -> FabricMaterial {
+impl Fitted {
+    /// The fabric's material with these values.
+    fn material(&self, data: &FabricDataset) -> FabricMaterial {
         FabricMaterial {
-            name: self.data.name.clone(),
-            areal_density: self.data.areal_density.unwrap_or(0.1),
+            name: data.name.clone(),
+            areal_density: data.areal_density.unwrap_or(0.1),
             thickness: self.thickness,
             law: self.law.clone(),
             bending: self.bending,
         }
     }
 
-    /// Every fitted parameter's standard error: each tensile stage's last run at the law's
-    /// final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ), then the thickness
-    /// or bending stage's.
-    fn final_uncertainty(&self) -> Vec<uncertainty::ParamError> {
+    /// The parameters (law, thickness, rigidities): a prediction's memo key.
+    fn param_bits(&self) -> Vec<u64> {
+        let mut p = self.law.params();
+        p.push(self.thickness);
+        if let Some(b) = self.bending {
+            p.extend([b.warp, b.weft, b.twist]);
+        }
+        p.iter().map(|v| v.to_bits()).collect()
+    }
+}
+
+impl Evidence {
+    /// How many standard errors and linearisations the stages have left: a trial's records
+    /// are those past these marks.
+    fn marks(&self) -> (usize, usize) {
+        (self.uncertainty.len(), self.linearised.len())
+    }
+
+    /// Every fitted parameter's standard error at the final `law`: each tensile stage's last
+    /// run at the law's final degree (stiffnesses rescaled with the thickness stage's τ⁰/τ),
+    /// then the thickness or bending stage's.
+    fn final_uncertainty(&self, law: &Orthotropic) -> Vec<uncertainty::ParamError> {
         let mut out = Vec::new();
         for dir in [Direction::Warp, Direction::Weft, Direction::Shear] {
             let (eta, c) = match dir {
-                Direction::Warp => (&self.law.warp, self.law.a11),
-                Direction::Weft => (&self.law.weft, self.law.a22),
-                Direction::Shear => (&self.law.shear, self.law.g12),
+                Direction::Warp => (&law.warp, law.a11),
+                Direction::Weft => (&law.weft, law.a22),
+                Direction::Shear => (&law.shear, law.g12),
             };
-            let found = self
-                .evidence
-                .uncertainty
-                .iter()
-                .rev()
-                .find(|(d, _, errors)| {
-                    *d == dir
-                        && errors.iter().filter(|e| e.name.contains("_alpha_")).count()
-                            == eta.degree()
-                });
+            let found = self.uncertainty.iter().rev().find(|(d, _, errors)| {
+                *d == dir
+                    && errors.iter().filter(|e| e.name.contains("_alpha_")).count() == eta.degree()
+            });
             if let Some((_, _, errors)) = found {
                 for e in errors {
                     let mut e = e.clone();
@@ -390,39 +377,67 @@ impl Fitter<'_> {
                 }
             }
         }
-        out.extend(self.evidence.stage_errors.iter().cloned());
+        out.extend(self.stage_errors.iter().cloned());
         out
     }
+}
 
-    /// The current parameters (law, thickness, rigidities): a prediction's memo key.
-    fn param_bits(&self) -> Vec<u64> {
-        let mut p = self.law.params();
-        p.push(self.thickness);
-        if let Some(b) = self.bending {
-            p.extend([b.warp, b.weft, b.twist]);
-        }
-        p.iter().map(|v| v.to_bits()).collect()
+/// What every stage reads and none changes: the dataset, the options and what set-up decided.
+struct Context<'a> {
+    data: &'a FabricDataset,
+    opts: &'a FitOptions,
+    /// the rule that sets a12 from the other stiffnesses (or holds it)
+    a12: A12Rule,
+    /// the prepared curves and strips
+    prep: Prepared,
+    /// the bends fit rigidities of their own (`--bending`) rather than the thickness
+    own_bending: bool,
+}
+
+/// What a stage works with: the context it reads, the lab it solves in, the record it writes
+/// to and the evidence it leaves. Not the fitted material: a stage is given the material it
+/// starts from and returns its optimum, which the pipeline applies.
+struct Bench<'f, 'a> {
+    ctx: &'f Context<'a>,
+    lab: &'f mut rigs::Lab,
+    journal: &'f mut journal::Journal<'a>,
+    stats: &'f mut FitStats,
+    evidence: &'f mut Evidence,
+}
+
+/// The fitter's working state, its parts each with one owner: the context is set up once;
+/// the material is written only where the pipeline and the ladder apply a stage's optimum;
+/// the lab's caches only by the lab, each test's mesh doublings only by `refine`; the evidence
+/// by the stages that leave it; the journal and the stats are the one record every stage
+/// writes to.
+struct Fitter<'a> {
+    ctx: Context<'a>,
+    /// progress lines, notes and the degree log
+    journal: journal::Journal<'a>,
+    stats: FitStats,
+    /// the material being fitted
+    fitted: Fitted,
+    /// what the stages leave for the standard errors and the mesh check
+    evidence: Evidence,
+    /// the virtual lab kept warm across stages: strips, cantilevers, predictions, yarn rule
+    lab: rigs::Lab,
+}
+
+impl<'a> Fitter<'a> {
+    /// The bench the stages work at, and the fitted material beside it.
+    fn bench(&mut self) -> (Bench<'_, 'a>, &Fitted) {
+        let bench = Bench {
+            ctx: &self.ctx,
+            lab: &mut self.lab,
+            journal: &mut self.journal,
+            stats: &mut self.stats,
+            evidence: &mut self.evidence,
+        };
+        (bench, &self.fitted)
     }
+}
 
-    /// Adds the seconds since `t`, and the Newton iterations since the last timed stage, to
-    /// `stage`.
-    fn time_stage(&mut self, stage: &str, t: Instant) {
-        let s = t.elapsed().as_secs_f64();
-        let st = &mut self.stats;
-        let its = st.newton_iterations - st.counted;
-        st.counted = st.newton_iterations;
-        if let Some(e) = st.stage_seconds.iter_mut().find(|e| e.0 == stage) {
-            e.1 += s;
-        } else {
-            st.stage_seconds.push((stage.to_string(), s));
-        }
-        if let Some(e) = st.stage_iterations.iter_mut().find(|e| e.0 == stage) {
-            e.1 += its;
-        } else {
-            st.stage_iterations.push((stage.to_string(), its));
-        }
-    }
-
+impl Context<'_> {
     /// A stage's minimiser settings on a mesh level, `n` residual groups (curves or bends):
     /// the first level fits; finer levels start from the last level's fit and only polish it
     /// (at most 5 iterations, stopping when one gains under 5 % or the next would move every

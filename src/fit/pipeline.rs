@@ -1,8 +1,10 @@
 //! The fit as its list of stages (Clyde et al. 2017 §5, extended): set-up, the homogeneous
 //! bootstrap, the multiresolution ladder of shell stages, the shear from captured shapes, each
 //! test's own mesh, the mesh check, and validation. Each stage is a function with its inputs
-//! and outputs in its signature; the [`Fitter`] carries the law being fitted, the warm strips
-//! and the notes, timings and progress lines that every stage adds to.
+//! and outputs in its signature: it is given the material it starts from and returns its
+//! optimum, which this module and the ladder apply to the [`Fitter`]'s material (`Fitted`);
+//! it solves in the lab and writes notes, timings and progress to the record it is lent
+//! ([`super::Bench`]).
 
 use super::journal::Journal;
 use super::map::{A12Rule, Direction, StageMap};
@@ -10,8 +12,8 @@ use super::measures::{self, Misfit, Objective};
 use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
-    bending, coupling, is_determined, joint, ladder, preprocess, refine, stages, uncertainty,
-    validation, FitError, FitOptions, FitResult, FitStats, Fitter,
+    bending, coupling, is_determined, joint, ladder, preprocess, refine, rigs, stages, thickness,
+    uncertainty, validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, Orthotropic};
@@ -31,8 +33,18 @@ pub fn fit(
     let strips = fitted_strips(&f);
     let mut maps = stage_maps(&f, &strips);
     require_yarn_data(&f, &strips)?;
-    let shear_candidates = stages::bootstrap_all(&mut f, &maps, &strips);
-    f.decide_yarns();
+    let (law, shear_candidates) = stages::bootstrap_all(
+        &f.ctx,
+        &mut f.journal,
+        &mut f.stats,
+        &f.fitted,
+        &maps,
+        &strips,
+    );
+    f.fitted.law = law;
+    if let Some(note) = f.lab.decide_yarns(opts, &f.fitted.law) {
+        f.journal.note(note);
+    }
     let mut sets = joint::stage_sets(opts, strips.clone(), &maps);
     let meshes = ladder::ladder(&mut f, &mut maps, &mut sets, &shear_candidates)?;
     if sets.joint.is_some() {
@@ -49,16 +61,18 @@ pub fn fit(
     }
     let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &sets, last)?;
     let t0 = Instant::now();
-    let tests = validation::outcomes(&mut f, last)?;
-    let identifiability = validation::identifiability(&f, &strips);
+    let (mut bench, fitted) = f.bench();
+    let tests = validation::outcomes(&mut bench, fitted, last)?;
+    let identifiability = validation::identifiability(&f.ctx, &f.fitted, &strips);
     if let Some(m) = &mesh_check {
-        f.mesh_check_notes(last, m);
+        let (mut bench, fitted) = f.bench();
+        bench.mesh_check_notes(fitted, last, m);
     }
-    f.time_stage("report", t0);
+    f.stats.time_stage("report", t0);
     closing_notes(&mut f);
     f.stats.seconds = f.journal.elapsed();
-    let material = f.material();
-    let yarn_rule = f.yarns();
+    let material = f.fitted.material(f.ctx.data);
+    let yarn_rule = f.lab.yarns();
     let (notes, degree_log) = f.journal.finish();
     Ok(FitResult {
         material,
@@ -74,8 +88,8 @@ pub fn fit(
         mesh_check,
         shapes_fitted,
         yarn_rule,
-        shear_coupling: f.coupling,
-        objective: f.prep.misfit,
+        shear_coupling: f.fitted.coupling,
+        objective: f.ctx.prep.misfit,
         joint: sets.joint.is_some(),
         test_meshes: opts.test_meshes,
     })
@@ -160,35 +174,35 @@ impl<'a> Fitter<'a> {
         setup: SetUp,
     ) -> Self {
         let known = &data.known;
+        let lab = rigs::Lab::new(setup.prep.strips.len());
         Fitter {
-            data,
-            opts,
+            lab,
+            ctx: Context {
+                data,
+                opts,
+                a12: setup.a12,
+                prep: setup.prep,
+                own_bending: setup.own_bending,
+            },
             journal: Journal::new(progress, start, setup.notes),
             stats: FitStats::default(),
-            law: Orthotropic {
-                a11: known.a11.unwrap_or(1.0e8),
-                a22: known.a22.unwrap_or(1.0e8),
-                a12: 0.5e8,
-                g12: known.g12.unwrap_or(2.0e6),
-                warp: Eta::linear(),
-                weft: Eta::linear(),
-                shear: Eta::linear(),
-                cutoffs: Cutoffs::none(),
-                coupling: None,
+            fitted: Fitted {
+                law: Orthotropic {
+                    a11: known.a11.unwrap_or(1.0e8),
+                    a22: known.a22.unwrap_or(1.0e8),
+                    a12: 0.5e8,
+                    g12: known.g12.unwrap_or(2.0e6),
+                    warp: Eta::linear(),
+                    weft: Eta::linear(),
+                    shear: Eta::linear(),
+                    cutoffs: Cutoffs::none(),
+                    coupling: None,
+                },
+                thickness: known.thickness.unwrap_or(data.thickness),
+                bending: None,
+                coupling: coupling::CouplingOutcome::Off,
             },
-            thickness: known.thickness.unwrap_or(data.thickness),
-            a12: setup.a12,
-            prep: setup.prep,
-            bend_angles: Vec::new(),
-            own_bending: setup.own_bending,
-            bending: None,
             evidence: Default::default(),
-            bend_refine: 0,
-            lab: Default::default(),
-            ladder_meshes: false,
-            coupling: coupling::CouplingOutcome::Off,
-            stage_rms: f64::NAN,
-            screened: None,
         }
     }
 }
@@ -198,24 +212,24 @@ const DIRECTIONS: [Direction; 3] = [Direction::Warp, Direction::Weft, Direction:
 
 /// The fitted strips of the warp, weft and shear stages.
 fn fitted_strips(f: &Fitter) -> Vec<Vec<usize>> {
-    DIRECTIONS.iter().map(|&d| f.stage_strips(d)).collect()
+    DIRECTIONS.iter().map(|&d| f.ctx.stage_strips(d)).collect()
 }
 
 /// Each stage's variables over the law (see [`StageMap`]).
 fn stage_maps(f: &Fitter, strips: &[Vec<usize>]) -> Vec<StageMap> {
-    let known = &f.data.known;
+    let known = &f.ctx.data.known;
     DIRECTIONS
         .iter()
         .zip(strips)
         .map(|(&dir, s)| StageMap {
             dir,
-            xhat: f.xhat(dir, s),
+            xhat: f.ctx.xhat(dir, s),
             c_known: match dir {
                 Direction::Warp => known.a11.is_some(),
                 Direction::Weft => known.a22.is_some(),
                 Direction::Shear => known.g12.is_some(),
             },
-            a12: f.a12,
+            a12: f.ctx.a12,
             coupling: false,
         })
         .collect()
@@ -223,8 +237,8 @@ fn stage_maps(f: &Fitter, strips: &[Vec<usize>]) -> Vec<StageMap> {
 
 /// Refuses a dataset with nothing to fit the yarn stiffness to.
 fn require_yarn_data(f: &Fitter, strips: &[Vec<usize>]) -> Result<(), FitError> {
-    let known = &f.data.known;
-    let has_fit_tests = f.prep.curves.iter().any(|c| c.role == Role::Fit);
+    let known = &f.ctx.data.known;
+    let has_fit_tests = f.ctx.prep.curves.iter().any(|c| c.role == Role::Fit);
     if strips[0].is_empty() && strips[1].is_empty() && known.a11.is_none() && known.a22.is_none() {
         return Err(FitError::Data(if has_fit_tests {
             "no fitted warp (90°) or weft (0°) tensile test and no [known] a11_pa or a22_pa: nothing to fit the yarn stiffness to (a bias-only dataset needs the yarn stiffnesses in [known])".into()
@@ -242,17 +256,42 @@ fn shapes_then_bends(
     strips: &[Vec<usize>],
     last: (usize, usize),
 ) -> Result<bool, FitError> {
-    let data = f.data;
+    let data = f.ctx.data;
     let known = &data.known;
-    let shapes_fitted = strips[2].is_empty() && known.g12.is_none() && f.shapes_stage()?;
-    if shapes_fitted {
-        if f.own_bending {
-            f.bending_stage(&data.bend, last)?;
-        } else if !data.bend.is_empty() && known.thickness.is_none() {
-            f.thickness_stage(&data.bend, last)?;
-        }
-    }
-    Ok(shapes_fitted)
+    let g12 = if strips[2].is_empty() && known.g12.is_none() {
+        super::shapes::shapes_stage(&f.ctx, &mut f.journal, &mut f.stats, &f.fitted)?
+    } else {
+        None
+    };
+    let Some(g12) = g12 else { return Ok(false) };
+    f.fitted.law.g12 = g12;
+    bend_stage(f, last)?;
+    Ok(true)
+}
+
+/// The bend stage on a mesh level, where the bends fit anything: the bends' own rigidities
+/// (`--bending`), or the thickness unless it is known. Its optimum becomes the fitted
+/// material and its evidence the fit's.
+pub(super) fn bend_stage(f: &mut Fitter, level: (usize, usize)) -> Result<(), FitError> {
+    let t0 = Instant::now();
+    let data = f.ctx.data;
+    let (ctx, lab, stats, m) = (&f.ctx, &mut f.lab, &mut f.stats, &f.fitted);
+    let fit = if ctx.own_bending {
+        bending::bending_stage(ctx, lab, stats, m, level)?
+    } else if !data.bend.is_empty() && data.known.thickness.is_none() {
+        thickness::thickness_stage(ctx, lab, stats, m, level)?
+    } else {
+        return Ok(());
+    };
+    f.evidence.linearised.extend(fit.linearised);
+    f.evidence.stage_errors = fit.errors;
+    f.evidence.bend_angles = fit.angles;
+    f.fitted.law = fit.law;
+    f.fitted.thickness = fit.thickness;
+    f.fitted.bending = fit.bending;
+    f.journal.say(&fit.line);
+    f.stats.time_stage(fit.stage, t0);
+    Ok(())
 }
 
 /// The final standard errors and the mesh check; a check that fails refines the strips of the
@@ -263,27 +302,35 @@ fn checked_meshes(
     sets: &StageSets,
     last: (usize, usize),
 ) -> Result<(Vec<uncertainty::ParamError>, Option<MeshCheck>), FitError> {
-    let opts = f.opts;
+    let opts = f.ctx.opts;
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
     let strict = opts.test_meshes == TestMeshes::Strict;
     let t0 = Instant::now();
-    let mut uncertainty = f.final_uncertainty();
+    let mut uncertainty = f.evidence.final_uncertainty(&f.fitted.law);
     if opts.mesh_check == MeshCheckMode::Off {
         return Ok((uncertainty, None));
     }
     let mut check = match f.evidence.ladder_check.take() {
         Some(m) => Some(m),
-        None => f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?,
+        None => {
+            let (mut bench, m) = f.bench();
+            bench.mesh_check(m, last, opts.mesh_check, &|n| {
+                is_determined(&uncertainty, n)
+            })?
+        }
     };
-    f.time_stage("mesh check", t0);
+    f.stats.time_stage("mesh check", t0);
     while let Some(m) = check.as_ref().filter(|m| own_meshes && !m.passes()) {
         if !refine::refine_for_check(f, maps, sets, last, m, strict)? {
             break;
         }
         let t0 = Instant::now();
-        uncertainty = f.final_uncertainty();
-        check = f.mesh_check(last, opts.mesh_check, &|n| is_determined(&uncertainty, n))?;
-        f.time_stage("mesh check", t0);
+        uncertainty = f.evidence.final_uncertainty(&f.fitted.law);
+        let (mut bench, m) = f.bench();
+        check = bench.mesh_check(m, last, opts.mesh_check, &|n| {
+            is_determined(&uncertainty, n)
+        })?;
+        f.stats.time_stage("mesh check", t0);
     }
     Ok((uncertainty, check))
 }
@@ -297,5 +344,5 @@ fn closing_notes(f: &mut Fitter) {
             "{n} strip equilibria of the tensile stages ended unstable (a saddle: the strip would wrinkle there); the measured points interpolated from them were excluded from the stage's objective (the curves' excluded_points count those of the final predictions)"
         ));
     }
-    f.time_stage("report", t0);
+    f.stats.time_stage("report", t0);
 }

@@ -64,8 +64,6 @@ pub struct Strip {
     /// the nodes are the measured elongations of every curve on the strip (no more of them
     /// than nodes asked for): the model forces at the points are solved, not interpolated
     pub at_points: bool,
-    /// times this strip's mesh is doubled beyond the ladder's level ([`super::refine`])
-    pub refine: u32,
 }
 
 /// The dataset's curves and strips.
@@ -304,7 +302,6 @@ fn group_strips(data: &FabricDataset, curves: &mut [Curve], n_nodes: usize) -> V
                     curves: Vec::new(),
                     nodes: Vec::new(),
                     at_points: false,
-                    refine: 0,
                 });
                 strips.len() - 1
             }

@@ -29,8 +29,10 @@
 
 use super::map::StageMap;
 use super::mesh_check::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL};
+use super::preprocess::Strip;
 use super::rigs::strip_mesh;
 use super::{mean_abs_finite, FitError, Fitter, StageMode};
+use crate::dataset::BendTest;
 use std::time::Instant;
 
 /// Each test's mesh (`fit --test-meshes`).
@@ -88,72 +90,120 @@ struct StripCheck {
     tolerance: f64,
 }
 
-impl Fitter<'_> {
-    /// The strip's mesh level: the ladder's `level` with its faces doubled `refine` times.
+/// Each test's mesh against the ladder's level: the doublings of every strip and of the
+/// bends, which only this module's refinement adds to.
+#[derive(Default)]
+pub(super) struct Doublings {
+    /// times each strip's mesh is doubled beyond the ladder's level
+    strips: Vec<u32>,
+    /// times the bends' meshes are doubled beyond it
+    bends: u32,
+    /// every strip on the ladder's level whatever its own doublings (cheap diagnostics)
+    ladder: bool,
+}
+
+impl Doublings {
+    /// None yet, for `strips` strips.
+    pub(super) fn new(strips: usize) -> Self {
+        Self {
+            strips: vec![0; strips],
+            ..Self::default()
+        }
+    }
+
+    /// Strip `s`'s mesh level: the ladder's `level` with its faces doubled as the strip was.
     pub(super) fn strip_level(&self, s: usize, level: (usize, usize)) -> (usize, usize) {
-        if self.ladder_meshes {
+        if self.ladder {
             return level;
         }
-        let r = self.prep.strips[s].refine;
+        let r = self.strips[s];
         (level.0 << r, level.1 << r)
+    }
+
+    /// Times strip `s` is doubled beyond the ladder's level.
+    pub(super) fn of_strip(&self, s: usize) -> u32 {
+        self.strips[s]
+    }
+
+    /// Whether any strip is doubled beyond the ladder's level.
+    pub(super) fn any_strip(&self) -> bool {
+        self.strips.iter().any(|&r| r > 0)
     }
 
     /// The bends' mesh level: the ladder's `level` with the faces doubled as the bends were.
     pub(super) fn bend_level(&self, level: (usize, usize)) -> (usize, usize) {
-        (level.0 << self.bend_refine, level.1 << self.bend_refine)
+        (level.0 << self.bends, level.1 << self.bends)
     }
 
-    /// Every strip's worst curve against its tolerance, solved on its mesh and on half of it.
-    fn strip_checks(&mut self, last: (usize, usize)) -> Result<Vec<StripCheck>, FitError> {
-        let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
-            .map(|s| (s, self.prep.strips[s].angle_deg))
-            .collect();
-        let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
-        let (fine, rough) = self.predict_pair(&jobs, last, half)?;
-        let order = self.mesh_order();
-        let mut out = Vec::new();
-        for (s, strip) in self.prep.strips.iter().enumerate() {
-            let mut worst = StripCheck {
-                estimate: 0.0,
-                tolerance: f64::INFINITY,
-            };
-            for &c in &strip.curves {
-                let model = self.curve_forces(c, &fine[s]);
-                let coarse = self.curve_forces(c, &rough[s]);
-                let estimate = curve_mesh_error(&model, &coarse, order);
-                let tolerance = mesh_tolerance(self.curve_fit_error(c, &model));
-                if estimate / tolerance > worst.estimate / worst.tolerance {
-                    worst = StripCheck {
-                        estimate,
-                        tolerance,
-                    };
-                }
-            }
-            out.push(worst);
-        }
-        Ok(out)
+    /// Every strip on the ladder's level (`on`) or on its own mesh.
+    pub(super) fn set_ladder(&mut self, on: bool) {
+        self.ladder = on;
+    }
+
+    /// Whether every strip is on the ladder's level whatever its own doublings.
+    pub(super) fn ladder(&self) -> bool {
+        self.ladder
     }
 
     /// Whether the bends' cantilevers may be doubled once more on top of `last`.
-    fn may_refine_bends(&self, last: (usize, usize)) -> bool {
+    fn may_refine_bends(&self, bends: &[BendTest], last: (usize, usize)) -> bool {
         let l = self.bend_level(last);
-        self.bend_refine < MAX_DOUBLINGS
-            && self.data.bend.iter().all(|b| {
+        self.bends < MAX_DOUBLINGS
+            && bends.iter().all(|b| {
                 let (nx, ny) = super::thickness::bend_mesh((2 * l.0, 2 * l.1), b);
                 nx * ny <= MAX_FACES
             })
     }
 
     /// Whether strip `s` may be doubled once more on top of `last`.
-    fn may_refine(&self, s: usize, last: (usize, usize)) -> bool {
-        let strip = &self.prep.strips[s];
-        if strip.refine >= MAX_DOUBLINGS {
+    fn may_refine(&self, strip: &Strip, s: usize, last: (usize, usize)) -> bool {
+        if self.strips[s] >= MAX_DOUBLINGS {
             return false;
         }
         let l = self.strip_level(s, last);
         let (nx, ny) = strip_mesh((2 * l.0, 2 * l.1), strip.width, strip.length);
         nx * ny <= MAX_FACES
     }
+}
+
+/// Every strip's worst curve against its tolerance, solved on its mesh and on half of it at
+/// the fitted material.
+fn strip_checks(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<StripCheck>, FitError> {
+    let prep = &f.ctx.prep;
+    let jobs: Vec<(usize, f64)> = (0..prep.strips.len())
+        .map(|s| (s, prep.strips[s].angle_deg))
+        .collect();
+    let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
+    let (fine, rough) = f
+        .lab
+        .predict_pair(&f.ctx, &f.fitted, &mut f.stats, &jobs, (last, half))?;
+    let order = super::mesh_check::mesh_order(&f.lab, &f.ctx, &f.fitted);
+    let mut out = Vec::new();
+    for (s, strip) in prep.strips.iter().enumerate() {
+        let mut worst = StripCheck {
+            estimate: 0.0,
+            tolerance: f64::INFINITY,
+        };
+        for &c in &strip.curves {
+            let model = f.ctx.curve_forces(c, &fine[s]);
+            let coarse = f.ctx.curve_forces(c, &rough[s]);
+            let estimate = curve_mesh_error(&model, &coarse, order);
+            let tolerance = mesh_tolerance(f.ctx.curve_fit_error(c, &model));
+            if estimate / tolerance > worst.estimate / worst.tolerance {
+                worst = StripCheck {
+                    estimate,
+                    tolerance,
+                };
+            }
+        }
+        out.push(worst);
+    }
+    Ok(out)
+}
+
+/// Whether strip `s` may be doubled once more on top of `last`.
+fn may_refine(f: &Fitter, s: usize, last: (usize, usize)) -> bool {
+    f.lab.meshes.may_refine(&f.ctx.prep.strips[s], s, last)
 }
 
 /// Refines every strip that misses its tolerance and refits the stages it belongs to (see the
@@ -169,10 +219,10 @@ pub(super) fn refine_tests(
         let t0 = Instant::now();
         f.journal
             .say("per-test meshes: every strip's mesh-error estimate");
-        let checks = f.strip_checks(last)?;
-        f.time_stage("per-test meshes", t0);
+        let checks = strip_checks(f, last)?;
+        f.stats.time_stage("per-test meshes", t0);
         let todo: Vec<(usize, String)> = (0..checks.len())
-            .filter(|&s| checks[s].estimate > checks[s].tolerance && f.may_refine(s, last))
+            .filter(|&s| checks[s].estimate > checks[s].tolerance && may_refine(f, s, last))
             .map(|s| {
                 let why = format!(
                     "estimated mesh error {:.2} % above its tolerance {:.2} %",
@@ -204,7 +254,7 @@ pub(super) fn refine_for_check(
     check: &MeshCheck,
     curves: bool,
 ) -> Result<bool, FitError> {
-    let checks = f.strip_checks(last)?;
+    let checks = strip_checks(f, last)?;
     let mut todo: Vec<(usize, String)> = Vec::new();
     for (k, strips) in sets.own.iter().enumerate() {
         // a stage that moves: its strip with the largest estimated mesh error, alone (one
@@ -215,7 +265,7 @@ pub(super) fn refine_for_check(
             let worst = strips
                 .iter()
                 .copied()
-                .filter(|&s| f.may_refine(s, last))
+                .filter(|&s| may_refine(f, s, last))
                 .max_by(|&a, &b| checks[a].estimate.total_cmp(&checks[b].estimate));
             if let Some(s) = worst {
                 let why = format!(
@@ -231,11 +281,12 @@ pub(super) fn refine_for_check(
     // `strict`: a fitted curve moving by 0.3 % after the refit has its strip refined, unless
     // a stage's rule above already refines it
     if curves && check.curve_change >= MESH_FLOOR {
-        let strip = f.prep.curves.iter().find_map(|c| {
-            let label = f.data.tensile[c.test].curve.display().to_string();
+        let strip = f.ctx.prep.curves.iter().find_map(|c| {
+            let label = f.ctx.data.tensile[c.test].curve.display().to_string();
             (label == check.curve).then_some(c.strip)
         });
-        if let Some(s) = strip.filter(|&s| f.may_refine(s, last) && todo.iter().all(|t| t.0 != s)) {
+        if let Some(s) = strip.filter(|&s| may_refine(f, s, last) && todo.iter().all(|t| t.0 != s))
+        {
             let why = format!(
                 "the mesh check moves its curve {} by {:.2} % after the refit; its estimated mesh error, {:.2} %",
                 check.curve,
@@ -254,27 +305,33 @@ pub(super) fn refine_for_check(
         .fold(0.0, f64::max);
     let angle_moved = check.angle_change_deg.unwrap_or(0.0);
     let bends = (bend_moved >= MESH_PARAM_TOL || angle_moved >= MESH_ANGLE_TOL_DEG)
-        && f.may_refine_bends(last);
+        && f.lab.meshes.may_refine_bends(&f.ctx.data.bend, last);
     if todo.is_empty() && !bends {
         return Ok(false);
     }
     if bends {
-        let from = f.bend_level(last);
-        let note = format!(
-            "per-test mesh: the bends refined from the {}x{} level's cantilevers to the {}x{} one's (the mesh check moves their thickness or rigidity by {:.2} %, their drape angles by {:.3}°)",
-            from.0,
-            from.1,
-            2 * from.0,
-            2 * from.1,
-            100.0 * bend_moved,
-            angle_moved
-        );
-        f.journal.say(&note);
-        f.journal.note(note);
-        f.bend_refine += 1;
+        refine_bends(f, last, bend_moved, angle_moved);
     }
     double_and_refit(f, maps, sets, last, &todo)?;
     Ok(true)
+}
+
+/// Doubles the bends' cantilevers once more, with the note that says why (the check moves
+/// their thickness or rigidity by `bend_moved`, their drape angles by `angle_moved` degrees).
+fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_moved: f64) {
+    let from = f.lab.meshes.bend_level(last);
+    let note = format!(
+        "per-test mesh: the bends refined from the {}x{} level's cantilevers to the {}x{} one's (the mesh check moves their thickness or rigidity by {:.2} %, their drape angles by {:.3}°)",
+        from.0,
+        from.1,
+        2 * from.0,
+        2 * from.1,
+        100.0 * bend_moved,
+        angle_moved
+    );
+    f.journal.say(&note);
+    f.journal.note(note);
+    f.lab.meshes.bends += 1;
 }
 
 /// Doubles the meshes of the strips in `todo` (each with the reason, for the notes), then
@@ -288,8 +345,8 @@ fn double_and_refit(
     todo: &[(usize, String)],
 ) -> Result<(), FitError> {
     for (s, why) in todo {
-        let strip = &f.prep.strips[*s];
-        let l = f.strip_level(*s, last);
+        let strip = &f.ctx.prep.strips[*s];
+        let l = f.lab.meshes.strip_level(*s, last);
         let from = strip_mesh(l, strip.width, strip.length);
         let to = strip_mesh((2 * l.0, 2 * l.1), strip.width, strip.length);
         let note = format!(
@@ -298,7 +355,7 @@ fn double_and_refit(
         );
         f.journal.say(&note);
         f.journal.note(note);
-        f.prep.strips[*s].refine += 1;
+        f.lab.meshes.strips[*s] += 1;
     }
     let stages = &sets.own;
     let first = (0..stages.len())
@@ -312,17 +369,12 @@ fn double_and_refit(
             "{} stage refitted on its strips' own meshes",
             maps[k].dir.name()
         ));
-        f.shell_stage(maps[k], &stages[k], last, false, StageMode::Full, None)?;
+        super::ladder::refit(f, maps[k], &stages[k], last, false, StageMode::Full)?;
         // a yarn stage's joint stiffness follows it (an off-axis strip refined alone leaves
         // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
-        f.joint_stiffness(maps[k], k, sets, last)?;
+        super::joint::joint_stiffness(f, maps[k], k, sets, last)?;
     }
-    let data = f.data;
-    if f.own_bending {
-        f.bending_stage(&data.bend, last)?;
-    } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-        f.thickness_stage(&data.bend, last)?;
-    }
+    super::pipeline::bend_stage(f, last)?;
     Ok(())
 }
 

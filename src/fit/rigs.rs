@@ -3,10 +3,14 @@
 //! measured on them.
 
 use super::preprocess::interpolation_weights;
-use super::{FitError, Fitter, RigKey, Work, FIT_RTOL, NEAR_ANGLE_DEG};
+use super::refine::Doublings;
+use super::{
+    Context, FitError, FitOptions, FitStats, Fitted, RigKey, Work, FIT_RTOL, NEAR_ANGLE_DEG,
+};
 use crate::assembly::YarnRule;
 use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig, TensileStrip};
+use std::collections::HashMap;
 
 /// A strip mesh at a ladder level: the level's 50 × 75 mm element size (h = 50 mm / NX) on the
 /// strip, but at least NX/4 faces across (a 2 mm strip gets 2, 4, 8 across on the default
@@ -37,80 +41,121 @@ pub(super) fn node_force(p: &crate::scene::TensilePoint) -> f64 {
     }
 }
 
-impl Fitter<'_> {
-    /// The yarn rule of every solve of the fit: `--yarn-rule`, with `auto` decided once by
-    /// the law after the bootstrap ([`Fitter::decide_yarns`]; the full rule until then).
-    pub(super) fn yarns(&self) -> YarnRule {
-        self.lab.yarns.unwrap_or(YarnRule::Full)
+/// The virtual lab a fit keeps warm across its stages: the strips and cantilevers set up, the
+/// node forces predicted, the yarn rule, and the meshes each test is solved on. It solves for
+/// the material it is given, never for one of its own.
+#[derive(Default)]
+pub(super) struct Lab {
+    /// strips already set up, warm
+    rigs: HashMap<RigKey, StripRig>,
+    /// cantilevers already set up, warm ([`Lab::bend_rigs`])
+    pub(super) bend_cache: HashMap<super::thickness::BendKey, crate::scene::BendRig>,
+    /// node forces already predicted, by strip and parameter bits
+    predictions: HashMap<(RigKey, Vec<u64>), Vec<f64>>,
+    /// the yarn rule of every solve, once decided ([`Lab::decide_yarns`])
+    yarns: Option<YarnRule>,
+    /// the yarn-to-shear ratio that sets new strips' β ([`Lab::pin_yarns`])
+    yarn_ratio: Option<f64>,
+    /// each test's mesh against the ladder's level ([`super::refine`])
+    pub(super) meshes: Doublings,
+}
+
+impl Lab {
+    /// A cold lab for `strips` strips, none refined.
+    pub(super) fn new(strips: usize) -> Self {
+        Self {
+            meshes: Doublings::new(strips),
+            ..Self::default()
+        }
     }
 
-    /// Pins the centre rule's β for the strips set up from now on to the current law's
-    /// yarn-to-shear ratio: at the start of each ladder level, so that one level's strips
-    /// (and the checks and reports on it) share one discretisation, while a level after a
-    /// first fit gets the β of a law near the answer, not the bootstrap's (on the ratio-2e4
-    /// fit of `paper_repro/stiff_fit` the bootstrap's ratio is far below the truth, and its β
-    /// on every level biased G12 by −0.97 %).
-    pub(super) fn pin_yarns(&mut self) {
-        self.lab.yarn_ratio = crate::material::Law::yarn_shear_ratio(&self.law);
+    /// The yarn rule of every solve of the fit: `--yarn-rule`, with `auto` decided once by
+    /// the law after the bootstrap ([`Lab::decide_yarns`]; the full rule until then).
+    pub(super) fn yarns(&self) -> YarnRule {
+        self.yarns.unwrap_or(YarnRule::Full)
+    }
+
+    /// The yarn-to-shear ratio that sets new strips' β.
+    pub(super) fn yarn_ratio(&self) -> Option<f64> {
+        self.yarn_ratio
+    }
+
+    /// A warm strip, if one is set up under `key`.
+    pub(super) fn warm_rig(&self, key: &RigKey) -> Option<&StripRig> {
+        self.rigs.get(key)
+    }
+
+    /// Pins the centre rule's β for the strips set up from now on to `law`'s yarn-to-shear
+    /// ratio: at the start of each ladder level, so that one level's strips (and the checks
+    /// and reports on it) share one discretisation, while a level after a first fit gets the
+    /// β of a law near the answer, not the bootstrap's (on the ratio-2e4 fit of
+    /// `paper_repro/stiff_fit` the bootstrap's ratio is far below the truth, and its β on
+    /// every level biased G12 by −0.97 %).
+    pub(super) fn pin_yarns(&mut self, law: &Orthotropic) {
+        self.yarn_ratio = crate::material::Law::yarn_shear_ratio(law);
     }
 
     /// The rule of a strip cut at `angle`: the fit's, but `auto` keeps the full rule where
     /// the yarns run along the cage ([`YarnRule::for_strip`]).
-    pub(super) fn strip_yarns(&self, angle: f64) -> YarnRule {
-        if self.opts.yarn_rule.for_strip(angle) == YarnRule::Full {
+    pub(super) fn strip_yarns(&self, opts: &FitOptions, angle: f64) -> YarnRule {
+        if opts.yarn_rule.for_strip(angle) == YarnRule::Full {
             YarnRule::Full
         } else {
             self.yarns()
         }
     }
 
-    /// Decides `--yarn-rule auto` by the bootstrapped law's yarn-to-shear ratio, so that
-    /// every strip of the fit shares one discretisation, and says so.
-    pub(super) fn decide_yarns(&mut self) {
-        let ratio = crate::material::Law::yarn_shear_ratio(&self.law);
-        let rule = self.opts.yarn_rule.resolve(ratio);
-        self.lab.yarns = Some(rule);
-        self.lab.yarn_ratio = ratio;
-        if rule == YarnRule::Centre {
-            let why = match self.opts.yarn_rule {
-                YarnRule::Auto => format!(
-                    " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, above {:.0})",
-                    ratio.unwrap_or(f64::NAN),
-                    crate::assembly::CENTRE_FROM_RATIO
-                ),
-                _ => String::new(),
-            };
-            self.journal.note(format!(
-                "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
-                super::mesh_check::order(self.opts.grading, rule, ratio)
-            ));
+    /// Decides `--yarn-rule auto` by the bootstrapped `law`'s yarn-to-shear ratio, so that
+    /// every strip of the fit shares one discretisation; the note that says so when the
+    /// centre rule is chosen.
+    pub(super) fn decide_yarns(&mut self, opts: &FitOptions, law: &Orthotropic) -> Option<String> {
+        let ratio = crate::material::Law::yarn_shear_ratio(law);
+        let rule = opts.yarn_rule.resolve(ratio);
+        self.yarns = Some(rule);
+        self.yarn_ratio = ratio;
+        if rule != YarnRule::Centre {
+            return None;
         }
+        let why = match opts.yarn_rule {
+            YarnRule::Auto => format!(
+                " (--yarn-rule auto: yarn-to-shear stiffness ratio {:.0} at the bootstrap, above {:.0})",
+                ratio.unwrap_or(f64::NAN),
+                crate::assembly::CENTRE_FROM_RATIO
+            ),
+            _ => String::new(),
+        };
+        Some(format!(
+            "yarn terms integrated on the face centres{why}: a membrane that does not lock on nearly inextensible yarns; mesh errors estimated at order {}",
+            super::mesh_check::order(opts.grading, rule, ratio)
+        ))
     }
 
-    /// The rig of strip `s` cut at `angle` on a mesh level: from the cache (warm) or set up;
-    /// hand it back with [`Fitter::keep_rig`].
+    /// The rig of strip `s` cut at `angle` on a mesh level for material `m`: from the cache
+    /// (warm) or set up; hand it back with [`Lab::keep_rig`].
     pub(super) fn strip_rig(
         &mut self,
+        ctx: &Context,
+        m: &Fitted,
         s: usize,
         angle: f64,
         level: (usize, usize),
     ) -> Result<(RigKey, StripRig), FitError> {
-        let level = self.strip_level(s, level);
-        let strip = &self.prep.strips[s];
-        let key = self.rig_key(s, angle, level);
-        if let Some(rig) = self.lab.rigs.remove(&key) {
+        let level = self.meshes.strip_level(s, level);
+        let strip = &ctx.prep.strips[s];
+        let key = ctx.rig_key(s, angle, level);
+        if let Some(rig) = self.rigs.remove(&key) {
             return Ok((key, rig));
         }
         let mut t = TensileStrip::new(strip.width, strip.length, angle);
         t.mesh = strip_mesh(level, strip.width, strip.length);
-        t.grading = self.opts.grading;
-        t.yarn_rule = self.strip_yarns(angle);
-        t.yarn_ratio = self.lab.yarn_ratio;
+        t.grading = ctx.opts.grading;
+        t.yarn_rule = self.strip_yarns(ctx.opts, angle);
+        t.yarn_ratio = self.yarn_ratio;
         // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
         t.solver.rtol = FIT_RTOL;
-        t.solver.strategy = self.opts.strategy;
+        t.solver.strategy = ctx.opts.strategy;
         let mut rig = t
-            .rig(&self.material(), &strip.nodes)
+            .rig(&m.material(ctx.data), &strip.nodes)
             .map_err(|source| FitError::Scene {
                 stage: format!("setting up the {angle}° strip"),
                 source,
@@ -118,7 +163,6 @@ impl Fitter<'_> {
         // a strip cut at a nearby angle (the misalignment grid) starts from the nearest such
         // strip's equilibria rather than from rest
         let nearest = self
-            .lab
             .rigs
             .iter()
             .filter(|(k, _)| k.0[..2] == key.0[..2] && k.1 == key.1 && k.2 == key.2)
@@ -131,61 +175,28 @@ impl Fitter<'_> {
         Ok((key, rig))
     }
 
-    /// The cache key of strip `s` cut at `angle` on the mesh of `level` (the strip's own).
-    pub(super) fn rig_key(&self, s: usize, angle: f64, level: (usize, usize)) -> RigKey {
-        let strip = &self.prep.strips[s];
-        (
-            [
-                strip.width.to_bits(),
-                strip.length.to_bits(),
-                angle.to_bits(),
-            ],
-            level,
-            strip.nodes.iter().map(|e| e.to_bits()).collect(),
-        )
-    }
-
     pub(super) fn keep_rig(&mut self, key: RigKey, mut rig: StripRig) {
         rig.set_wanted(None);
-        self.lab.rigs.insert(key, rig);
+        self.rigs.insert(key, rig);
     }
 
-    /// Runs a rig with `law` and the current thickness (forces, and ∂F/∂k when asked).
-    pub(super) fn run_rig(
-        &mut self,
-        rig: &mut StripRig,
-        law: &Orthotropic,
-        sens: bool,
-    ) -> Result<NodeForces, SceneError> {
-        rig.set_material(law, self.thickness)?;
-        rig.set_bending(self.bending);
-        let pts = rig.run(sens)?;
-        let newton = pts.iter().map(|p| p.report.iterations).sum();
-        self.stats.record(Work::run(pts.len(), newton));
-        Ok((
-            pts.iter().map(node_force).collect(),
-            pts.into_iter().map(|p| p.dforce).collect(),
-        ))
-    }
-
-    /// Node forces of strip `s` cut at `angle` on a mesh level with the current material (no
-    /// sensitivities), memoised by parameters.
+    /// Node forces of strip `s` cut at `angle` on a mesh level for material `m` (no
+    /// sensitivities), memoised by parameters; the solver's work goes to `stats`.
     pub(super) fn predict(
         &mut self,
-        s: usize,
-        angle: f64,
-        level: (usize, usize),
+        ctx: &Context,
+        m: &Fitted,
+        stats: &mut FitStats,
+        (s, angle, level): (usize, f64, (usize, usize)),
     ) -> Result<Vec<f64>, FitError> {
-        let (key, mut rig) = self.strip_rig(s, angle, level)?;
-        let law = self.law.clone();
-        let memo_key = (key.clone(), self.param_bits());
-        if let Some(f) = self.lab.predictions.get(&memo_key) {
+        let (key, mut rig) = self.strip_rig(ctx, m, s, angle, level)?;
+        let memo_key = (key.clone(), m.param_bits());
+        if let Some(f) = self.predictions.get(&memo_key) {
             let f = f.clone();
             self.keep_rig(key, rig);
             return Ok(f);
         }
-        let out = self
-            .run_rig(&mut rig, &law, false)
+        let out = run_rig(&mut rig, &m.law, m, stats, false)
             .map(|r| r.0)
             .map_err(|source| FitError::Scene {
                 stage: format!("predicting the {angle}° strip"),
@@ -193,41 +204,46 @@ impl Fitter<'_> {
             });
         self.keep_rig(key, rig);
         if let Ok(f) = &out {
-            self.lab.predictions.insert(memo_key, f.clone());
+            self.predictions.insert(memo_key, f.clone());
         }
         out
     }
 
-    /// Node forces of several (strip, angle) pairs on a mesh level with the current material,
-    /// the strips solved side by side (independent solves, so the results are those of
-    /// solving them one after another, bit for bit).
+    /// Node forces of several (strip, angle) pairs on a mesh level for material `m`, the
+    /// strips solved side by side (independent solves, so the results are those of solving
+    /// them one after another, bit for bit).
     pub(super) fn predict_many(
         &mut self,
+        ctx: &Context,
+        m: &Fitted,
+        stats: &mut FitStats,
         jobs: &[(usize, f64)],
         level: (usize, usize),
     ) -> Result<Vec<Vec<f64>>, FitError> {
         let jobs: Vec<_> = jobs.iter().map(|&(s, angle)| (s, angle, level)).collect();
-        self.predict_levels(&jobs)
+        self.predict_levels(ctx, m, stats, &jobs)
     }
 
-    /// The same jobs on two mesh levels, solved in one batch ([`Fitter::predict_levels`]):
-    /// the forces on `a`, then on `b`.
+    /// The same jobs on two mesh levels, solved in one batch ([`Lab::predict_levels`]): the
+    /// forces on `a`, then on `b`.
     pub(super) fn predict_pair(
         &mut self,
+        ctx: &Context,
+        m: &Fitted,
+        stats: &mut FitStats,
         jobs: &[(usize, f64)],
-        a: (usize, usize),
-        b: (usize, usize),
+        (a, b): ((usize, usize), (usize, usize)),
     ) -> Result<(Vec<NodeSet>, Vec<NodeSet>), FitError> {
         let both: Vec<_> = [a, b]
             .iter()
             .flat_map(|&l| jobs.iter().map(move |&(s, angle)| (s, angle, l)))
             .collect();
-        let mut on_a = self.predict_levels(&both)?;
+        let mut on_a = self.predict_levels(ctx, m, stats, &both)?;
         let on_b = on_a.split_off(jobs.len());
         Ok((on_a, on_b))
     }
 
-    /// [`Fitter::predict_many`] with a mesh level per job: strips on two levels (an estimate's
+    /// [`Lab::predict_many`] with a mesh level per job: strips on two levels (an estimate's
     /// mesh and its half) solved in one batch, so that a long solve on one level keeps one core
     /// while the other takes the rest (the ratio-2e4 fit of `paper_repro/stiff_fit`: its
     /// wrinkling 67.5° strip takes 36 s on 16 × 24, its nine other solves of the first per-test
@@ -235,18 +251,16 @@ impl Fitter<'_> {
     /// split in halves).
     pub(super) fn predict_levels(
         &mut self,
+        ctx: &Context,
+        m: &Fitted,
+        stats: &mut FitStats,
         jobs: &[(usize, f64, (usize, usize))],
     ) -> Result<Vec<Vec<f64>>, FitError> {
-        use rayon::prelude::*;
-        let law = self.law.clone();
-        let bits = self.param_bits();
+        let bits = m.param_bits();
         let mut todo: Vec<(RigKey, StripRig, f64)> = Vec::new();
         for &(s, angle, level) in jobs {
-            let (key, rig) = self.strip_rig(s, angle, level)?;
-            if self
-                .lab
-                .predictions
-                .contains_key(&(key.clone(), bits.clone()))
+            let (key, rig) = self.strip_rig(ctx, m, s, angle, level)?;
+            if self.predictions.contains_key(&(key.clone(), bits.clone()))
                 || todo.iter().any(|t| t.0 == key)
             {
                 self.keep_rig(key, rig);
@@ -254,31 +268,15 @@ impl Fitter<'_> {
                 todo.push((key, rig, angle));
             }
         }
-        let (tau, bending) = (self.thickness, self.bending);
-        // taken in order by whichever thread is free (not split in halves): two long solves
-        // next to each other go to different cores
-        let mut results: Vec<(usize, Result<Vec<crate::scene::TensilePoint>, SceneError>)> = todo
-            .iter_mut()
-            .enumerate()
-            .par_bridge()
-            .map(|(i, (_, rig, _))| {
-                let run = rig.set_material(&law, tau).and_then(|_| {
-                    rig.set_bending(bending);
-                    rig.run(false)
-                });
-                (i, run)
-            })
-            .collect();
-        results.sort_by_key(|r| r.0);
-        let results = results.into_iter().map(|r| r.1);
+        let results = run_side_by_side(&mut todo, m);
         let mut failed = None;
         for ((key, rig, angle), r) in todo.into_iter().zip(results) {
             match r {
                 Ok(pts) => {
                     let newton = pts.iter().map(|p| p.report.iterations).sum();
-                    self.stats.record(Work::run(pts.len(), newton));
+                    stats.record(Work::run(pts.len(), newton));
                     let f: Vec<f64> = pts.iter().map(node_force).collect();
-                    self.lab.predictions.insert((key.clone(), bits.clone()), f);
+                    self.predictions.insert((key.clone(), bits.clone()), f);
                 }
                 Err(source) => {
                     failed.get_or_insert(FitError::Scene {
@@ -293,8 +291,69 @@ impl Fitter<'_> {
             return Err(e);
         }
         jobs.iter()
-            .map(|&(s, angle, level)| self.predict(s, angle, level))
+            .map(|&job| self.predict(ctx, m, stats, job))
             .collect()
+    }
+}
+
+/// Runs the strips of `todo` for material `m` side by side, taken in order by whichever thread
+/// is free (not split in halves: two long solves next to each other go to different cores);
+/// the results in `todo`'s order.
+fn run_side_by_side(
+    todo: &mut [(RigKey, StripRig, f64)],
+    m: &Fitted,
+) -> Vec<Result<Vec<crate::scene::TensilePoint>, SceneError>> {
+    use rayon::prelude::*;
+    let (law, tau, bending) = (&m.law, m.thickness, m.bending);
+    let mut results: Vec<(usize, Result<Vec<crate::scene::TensilePoint>, SceneError>)> = todo
+        .iter_mut()
+        .enumerate()
+        .par_bridge()
+        .map(|(i, (_, rig, _))| {
+            let run = rig.set_material(law, tau).and_then(|_| {
+                rig.set_bending(bending);
+                rig.run(false)
+            });
+            (i, run)
+        })
+        .collect();
+    results.sort_by_key(|r| r.0);
+    results.into_iter().map(|r| r.1).collect()
+}
+
+/// Runs a rig with `law` and `m`'s thickness and rigidities (forces, and ∂F/∂k when asked);
+/// the solver's work goes to `stats`.
+pub(super) fn run_rig(
+    rig: &mut StripRig,
+    law: &Orthotropic,
+    m: &Fitted,
+    stats: &mut FitStats,
+    sens: bool,
+) -> Result<NodeForces, SceneError> {
+    rig.set_material(law, m.thickness)?;
+    rig.set_bending(m.bending);
+    let pts = rig.run(sens)?;
+    let newton = pts.iter().map(|p| p.report.iterations).sum();
+    stats.record(Work::run(pts.len(), newton));
+    Ok((
+        pts.iter().map(node_force).collect(),
+        pts.into_iter().map(|p| p.dforce).collect(),
+    ))
+}
+
+impl Context<'_> {
+    /// The cache key of strip `s` cut at `angle` on the mesh of `level` (the strip's own).
+    pub(super) fn rig_key(&self, s: usize, angle: f64, level: (usize, usize)) -> RigKey {
+        let strip = &self.prep.strips[s];
+        (
+            [
+                strip.width.to_bits(),
+                strip.length.to_bits(),
+                angle.to_bits(),
+            ],
+            level,
+            strip.nodes.iter().map(|e| e.to_bits()).collect(),
+        )
     }
 
     /// Mean |relative error| of curve `c`'s measured points against its `model` forces (NaN

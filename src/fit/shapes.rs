@@ -18,7 +18,8 @@
 //! test; its force converges with the mesh where the wrinkles do not), reusing the scan's
 //! solves; without a measured force G12 stays assumed and a warning says why.
 
-use super::{FitError, Fitter, Work};
+use super::journal::Journal;
+use super::{Context, FitError, FitStats, Fitted, Work};
 use crate::dataset::FabricDataset;
 use crate::fit::shape_target::ShapeTarget;
 use crate::fit::shape_target::SHAPE_TRUST;
@@ -78,83 +79,86 @@ fn minimise_ln(g0: f64, cost: &mut dyn FnMut(f64) -> f64) -> Option<(f64, f64)> 
     Some((g0 * u.exp(), f))
 }
 
-impl Fitter<'_> {
-    /// Fits G12 to the fitted shapes that shear the sheet; `Ok(false)` (nothing done) when
-    /// there are none. The caller runs it only where no off-axis strip fitted the shear.
-    pub(super) fn shapes_stage(&mut self) -> Result<bool, FitError> {
-        let t0 = Instant::now();
-        let targets = shearing_targets(self.data)?;
-        if targets.is_empty() {
-            return Ok(false);
-        }
-        let g0 = self.law.g12;
-        let mut scan = ShearScan {
-            targets: &targets,
-            g0,
-            evaluations: 0,
-            material: self.material(),
-            solved: Default::default(),
-        };
-        let Some((g12, f)) = scan.fit(Objective::Shapes) else {
+/// G12 fitted to the fitted shapes that shear the sheet, from material `m`; `Ok(None)`
+/// (nothing fitted) when there are none or the model reproduces neither their shapes nor a
+/// measured force. The caller runs it only where no off-axis strip fitted the shear.
+pub(super) fn shapes_stage(
+    ctx: &Context,
+    journal: &mut Journal,
+    stats: &mut FitStats,
+    m: &Fitted,
+) -> Result<Option<f64>, FitError> {
+    let t0 = Instant::now();
+    let targets = shearing_targets(ctx.data)?;
+    if targets.is_empty() {
+        return Ok(None);
+    }
+    let g0 = m.law.g12;
+    let mut scan = ShearScan {
+        targets: &targets,
+        g0,
+        evaluations: 0,
+        material: m.material(ctx.data),
+        solved: Default::default(),
+    };
+    let Some((g12, f)) = scan.fit(Objective::Shapes) else {
+        return Err(no_solve(g0));
+    };
+    let at_shapes = scan.errors(g12);
+    let reproduced = at_shapes.iter().all(|e| *e < SHAPE_TRUST);
+    let with_force = targets.iter().any(|t| t.test.force.is_some());
+    let (g12, f, basis) = if reproduced {
+        (g12, f, "shape(s) and force(s)")
+    } else if with_force {
+        // wrinkles are not the lab's: their branch can change with the mesh while the
+        // frame's force does not (the shell's own 30° frame of a stiff-shear cotton on
+        // 24 × 24 against 12 × 12: positions 181 % apart, forces 0.4 %)
+        journal.note(format!(
+            "the shell does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %; buckled wrinkles take another branch on this mesh), so G12 is fitted to the measured force(s) alone",
+            describe(&targets, &at_shapes),
+            100.0 * SHAPE_TRUST
+        ));
+        let Some((g, f)) = scan.fit(Objective::Forces) else {
             return Err(no_solve(g0));
         };
-        let at_shapes = scan.errors(g12);
-        let reproduced = at_shapes.iter().all(|e| *e < SHAPE_TRUST);
-        let with_force = targets.iter().any(|t| t.test.force.is_some());
-        let (g12, f, basis) = if reproduced {
-            (g12, f, "shape(s) and force(s)")
-        } else if with_force {
-            // wrinkles are not the lab's: their branch can change with the mesh while the
-            // frame's force does not (the shell's own 30° frame of a stiff-shear cotton on
-            // 24 × 24 against 12 × 12: positions 181 % apart, forces 0.4 %)
-            self.journal.note(format!(
-                "the shell does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %; buckled wrinkles take another branch on this mesh), so G12 is fitted to the measured force(s) alone",
-                describe(&targets, &at_shapes),
-                100.0 * SHAPE_TRUST
-            ));
-            let Some((g, f)) = scan.fit(Objective::Forces) else {
-                return Err(no_solve(g0));
-            };
-            (g, f, "measured force(s)")
-        } else {
-            self.journal.note(format!(
-                "WARNING: the model does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %) and no force was measured: G12 stays assumed",
-                describe(&targets, &at_shapes),
-                100.0 * SHAPE_TRUST
-            ));
-            self.stats.record(Work {
-                evaluations: scan.evaluations,
-                ..Work::default()
-            });
-            self.time_stage("shapes", t0);
-            return Ok(false);
-        };
-        self.law.g12 = g12;
-        let evaluations = scan.evaluations;
-        self.stats.record(Work {
-            evaluations,
+        (g, f, "measured force(s)")
+    } else {
+        journal.note(format!(
+            "WARNING: the model does not reproduce the captured shape(s) at any shear stiffness ({}: above {:.0} %) and no force was measured: G12 stays assumed",
+            describe(&targets, &at_shapes),
+            100.0 * SHAPE_TRUST
+        ));
+        stats.record(Work {
+            evaluations: scan.evaluations,
             ..Work::default()
         });
-        let errors = scan.errors(g12);
-        self.journal.say(&format!(
-            "shapes stage: G12 = {g12:.4e} Pa from {} captured shape(s)' {basis} (assumed {g0:.4e} Pa), shape error {} ({evaluations} scene solves, objective {f:.3e})",
-            targets.len(),
-            describe(&targets, &errors)
+        stats.time_stage("shapes", t0);
+        return Ok(None);
+    };
+    let evaluations = scan.evaluations;
+    stats.record(Work {
+        evaluations,
+        ..Work::default()
+    });
+    let errors = scan.errors(g12);
+    journal.say(&format!(
+        "shapes stage: G12 = {g12:.4e} Pa from {} captured shape(s)' {basis} (assumed {g0:.4e} Pa), shape error {} ({evaluations} scene solves, objective {f:.3e})",
+        targets.len(),
+        describe(&targets, &errors)
+    ));
+    let edge = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp() * (1.0 - BRACKET);
+    if g12 >= g0 * edge || g12 <= g0 / edge {
+        journal.note(format!(
+            "WARNING: the fitted G12 lies at the end of the range searched ({}): the shape(s) may need a shear stiffness outside it",
+            scan_range(g0)
         ));
-        let edge = (SCAN as f64 * 0.5 * std::f64::consts::LN_2).exp() * (1.0 - BRACKET);
-        if g12 >= g0 * edge || g12 <= g0 / edge {
-            self.journal.note(format!(
-                "WARNING: the fitted G12 lies at the end of the range searched ({}): the shape(s) may need a shear stiffness outside it",
-                scan_range(g0)
-            ));
-        }
-        self.journal.note(format!(
-            "G12 = {g12:.4e} Pa fitted to {} captured shape(s)' {basis} (no off-axis strip determines the shear; the shear law stays linear)",
-            targets.len()
-        ));
-        self.time_stage("shapes", t0);
-        Ok(true)
     }
+    journal.note(format!(
+        "G12 = {g12:.4e} Pa fitted to {} captured shape(s)' {basis} (no off-axis strip determines the shear; the shear law stays linear)",
+        targets.len()
+    ));
+    stats.time_stage("shapes", t0);
+    Ok(Some(g12))
 }
 
 /// The dataset's fitted shapes whose scenes shear the sheet.

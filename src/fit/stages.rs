@@ -2,23 +2,30 @@
 //! tensile stages on the shell model (the thickness stage is in `thickness.rs`, the ladder of
 //! meshes in `ladder.rs`).
 
+mod homogeneous;
 mod problem;
 
-use super::map::{beta_to_var, Direction, StageMap};
+pub(super) use homogeneous::bootstrap_all;
+
+use super::map::StageMap;
 use super::optim::OptimReport;
-use super::surrogate::{homogeneous_fit, MappedStart};
+use super::surrogate::MappedStart;
 use super::uncertainty::Seen;
-use super::{FitError, Fitter, RigKey, StrainRange, Work};
+use super::{Bench, FitError, Fitted, RigKey, StrainRange, Work};
+use crate::material::Orthotropic;
 use crate::scene::{SceneError, StripRig};
 use problem::{fit_stage, screen_trial, stage_start, Counts, StageProblem};
-use rayon::prelude::*;
 use std::time::Instant;
 
-/// What a tensile stage fits ([`Fitter::shell_stage`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What a tensile stage fits ([`Bench::shell_stage`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum StageMode {
     /// every variable of the stage's map
     Full,
+    /// every variable, a trial screened at its space-mapped start: given up there unless the
+    /// shape error has not risen above `shape` or the rms error already fell by the degree
+    /// gain from `rms` (the coupling's trial, see [`super::coupling`])
+    Screened { shape: f64, rms: f64 },
     /// every variable, a degree just raised: given up when its space-mapped start finds no
     /// better law
     Raise,
@@ -34,156 +41,39 @@ pub(super) enum StageMode {
     Stiffness,
 }
 
-impl Fitter<'_> {
-    /// Bootstrap fits of one direction from several starts on the homogeneous strip over the
-    /// stage's curves, side by side (independent fits; the first start with the least mean
-    /// relative error wins, as one after another): (p, mean relative error, shape error).
-    fn bootstrap_best(
-        &mut self,
-        map: StageMap,
-        curves: &[usize],
-        starts: Vec<Vec<f64>>,
-    ) -> Option<(Vec<f64>, f64, f64)> {
-        let (prep, law, tau) = (&self.prep, &self.law, self.thickness);
-        let fits: Vec<_> = starts
-            .into_par_iter()
-            .map(|p0| homogeneous_fit(prep, law, tau, map, curves, p0, None))
-            .collect();
-        let mut best: Option<(Vec<f64>, f64, f64)> = None;
-        for fit in fits.into_iter().flatten() {
-            self.stats.record(Work::bootstrap(fit.evaluations));
-            if best.as_ref().is_none_or(|b| fit.error < b.1) {
-                best = Some((fit.p, fit.error, fit.shape));
-            }
+/// A tensile stage fitted: the law at its optimum, its shape error, its rms relative error
+/// and, when asked, the strains its strips exercise there.
+#[derive(Clone, Debug)]
+pub(super) struct StageFit {
+    pub law: Orthotropic,
+    pub shape: f64,
+    pub rms: f64,
+    pub range: Option<StrainRange>,
+}
+
+/// How a tensile stage's run ends ([`Bench::shell_stage`]).
+#[derive(Clone, Debug)]
+pub(super) enum StageRun {
+    Fitted(Box<StageFit>),
+    /// a trial given up at its space-mapped start; a screened trial's shape and rms errors
+    /// there when the screen gave it up
+    GivenUp(Option<(f64, f64)>),
+}
+
+impl StageRun {
+    /// The fit, `None` for a trial given up.
+    pub(super) fn fitted(self) -> Option<StageFit> {
+        match self {
+            StageRun::Fitted(fit) => Some(*fit),
+            StageRun::GivenUp(_) => None,
         }
-        best
     }
+}
 
-    /// Degree choice and initial guess of one direction on the homogeneous strip. Degree
-    /// d + 1 starts from degree d's optimum (among other starts), so it never ends worse.
-    /// Returns the chosen degree's variables and every degree's fit (index d − 1).
-    fn bootstrap(&mut self, map: StageMap, curves: &[usize]) -> (Vec<f64>, Vec<Vec<f64>>) {
-        // secant stiffness of the first curve as the start of degree 1
-        let c0 = {
-            let curve = &self.prep.curves[curves[0]];
-            let s = &self.prep.strips[curve.strip];
-            let (dl, f) = *curve.points.last().expect("a curve with points");
-            let lambda = 1.0 + dl / s.length;
-            let secant = f / (s.width * self.thickness * lambda * super::green(dl, s.length));
-            match map.dir {
-                Direction::Shear => 0.25 * secant,
-                _ => secant,
-            }
-        };
-        let starts = [1e-3, 1.0, 5.0]
-            .iter()
-            .map(|&beta| {
-                if map.c_known {
-                    vec![beta_to_var(beta)]
-                } else {
-                    vec![c0.ln(), beta_to_var(beta)]
-                }
-            })
-            .collect();
-        let Some(mut chosen) = self.bootstrap_best(map, curves, starts) else {
-            return (map.encode(&self.law), Vec::new());
-        };
-        let mut all = vec![chosen.0.clone()];
-        self.log_degree(format!(
-            "{}: degree 1, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
-            map.dir.name(),
-            100.0 * chosen.1,
-            100.0 * chosen.2
-        ));
-        let fixed = self.opts.fixed_degree;
-        for degree in 2..=fixed.unwrap_or(self.opts.max_degree) {
-            if fixed.is_none() && chosen.2 <= self.opts.degree_good {
-                self.journal.degree(format!(
-                    "{}: degree {} kept: error below {:.2} %",
-                    map.dir.name(),
-                    degree - 1,
-                    100.0 * self.opts.degree_good
-                ));
-                break;
-            }
-            let prev = all.last().expect("degree 1").clone();
-            let mut starts = Vec::new();
-            for mu_new in [0.0, 0.3, -0.3, 0.7] {
-                for beta_new in [0.5, 2.0, 4.0, 5.5] {
-                    let mut p = map.raise(&prev, beta_new);
-                    let o = usize::from(!map.c_known);
-                    p[o + degree - 2] = mu_new;
-                    starts.push(p);
-                }
-            }
-            let Some(candidate) = self.bootstrap_best(map, curves, starts) else {
-                break;
-            };
-            if fixed.is_none() {
-                let mut law = self.law.clone();
-                map.decode(&candidate.0, &mut law);
-                let saved = std::mem::replace(&mut self.law, law);
-                let why = super::plausible::implausible(&self.law, map, None);
-                self.law = saved;
-                if let Some(why) = why {
-                    self.log_degree(format!(
-                        "{}: degree {} kept: degree {degree} {why} (homogeneous strip)",
-                        map.dir.name(),
-                        degree - 1
-                    ));
-                    break;
-                }
-            }
-            self.log_degree(format!(
-                "{}: degree {degree}, mean relative error {:.3} %, shape error {:.3} % (homogeneous strip)",
-                map.dir.name(),
-                100.0 * candidate.1,
-                100.0 * candidate.2
-            ));
-            all.push(candidate.0.clone());
-            let gains = fixed.is_some() || candidate.2 <= self.opts.degree_gain * chosen.2;
-            if gains && fixed.is_none() && self.yarn_law_falls(map, &candidate.0) {
-                self.log_degree(format!(
-                    "{}: degree {} kept: degree {degree} has a negative weight on its stiffest term, so its stress falls just past the tested strain (homogeneous strip)",
-                    map.dir.name(),
-                    degree - 1
-                ));
-                break;
-            }
-            if gains {
-                chosen = candidate;
-            } else {
-                self.journal.degree(format!(
-                    "{}: degree {} kept: degree {degree} lowers the shape error by less than {:.0} %",
-                    map.dir.name(),
-                    degree - 1,
-                    100.0 * (1.0 - self.opts.degree_gain)
-                ));
-                break;
-            }
-        }
-        (chosen.0, all)
-    }
-
-    /// Whether the yarn law of `map` at the bootstrap's variables p falls eventually
-    /// ([`super::plausible::falls_eventually`]): its stress then falls a little past the
-    /// tested strain, where the shell's strips reach at the jaws' corners, and their solves
-    /// fail. The shear's degree is chosen again on the shell ([`super::degrees`]), where such
-    /// a raise that fails to solve keeps the lower degree.
-    fn yarn_law_falls(&self, map: StageMap, p: &[f64]) -> bool {
-        let mut law = self.law.clone();
-        map.decode(p, &mut law);
-        map.dir != Direction::Shear && super::plausible::falls_eventually(map.eta(&law))
-    }
-
-    pub(super) fn log_degree(&mut self, line: String) {
-        self.journal.say(&line);
-        self.journal.degree(line);
-    }
-
+impl Bench<'_, '_> {
     /// One tensile stage on the shell model at one mesh level, over the stage's strips, from
-    /// the current law alone (`shell_stage` falls back from it, see [`super::fallback`]);
-    /// returns the shape error at the optimum ([`super::shape_error`]) and, when asked, the
+    /// material `m` alone (`shell_stage` falls back from it, see [`super::fallback`]);
+    /// returns the law and the shape error at the optimum ([`super::shape_error`]) and, when asked, the
     /// strain range the strips exercise there. On the first level the stage starts with
     /// space-mapped steps on the homogeneous strip ([`super::surrogate`]); a `raise`d degree
     /// whose mapped steps find no better law is given up (`None`): a bet that the shell's own
@@ -194,27 +84,27 @@ impl Fitter<'_> {
     /// work (below).
     pub(super) fn shell_stage_once(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &[usize],
         level: (usize, usize),
         strain_range: bool,
         mode: StageMode,
-        screen: Option<(f64, f64)>,
-    ) -> Result<Option<(f64, Option<StrainRange>)>, FitError> {
+    ) -> Result<StageRun, FitError> {
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         let t0 = Instant::now();
-        let mut sp = self.stage_problem(map, strips, level)?;
-        let mut p = self.unsaturated_start(map);
-        let first_level = level == self.opts.ladder[0];
-        let opts = self.stage_options(level, 1e-12, sp.ncurves);
-        if !self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease, screen)? {
-            self.time_stage(map.dir.name(), t0);
-            return Ok(None);
+        let mut sp = self.stage_problem(m, map, strips, level)?;
+        let mut p = self.unsaturated_start(&m.law, map);
+        let first_level = level == self.ctx.opts.ladder[0];
+        let opts = self.ctx.stage_options(level, 1e-12, sp.ncurves);
+        if let Some(given_up) = self.mapped_stage_start(&mut sp, &mut p, mode, opts.rel_decrease)? {
+            self.stats.time_stage(map.dir.name(), t0);
+            return Ok(given_up);
         }
         let stiffness_first = (first_level || stiffness_only) && !map.c_known;
         let (rep, dropped) = fit_stage(
             &mut sp,
-            &self.prep,
+            &self.ctx.prep,
             &mut p,
             &opts,
             stiffness_first,
@@ -222,13 +112,14 @@ impl Fitter<'_> {
         )
         .map_err(stage_failed(map, level))?;
         self.stats.record(sp.counts.work());
-        map.decode(&p, &mut self.law);
+        let mut law = m.law.clone();
+        map.decode(&p, &mut law);
         let err = (rep.objective / sp.ncurves.max(1) as f64).sqrt();
-        let shape = self.stage_optimum(&sp, &p, err);
+        let shape = self.stage_optimum(&sp, &p, err, &law);
         let msg = self.stage_line(&sp, &p, (err, shape), &rep);
         self.journal.say(&msg);
         if dropped > 0 {
-            self.log_degree(format!(
+            self.journal.log_degree(format!(
                 "{}: {dropped} term(s) dropped on {}×{}: under {:.1} % of η' over the tested range",
                 map.dir.name(),
                 level.0,
@@ -237,46 +128,51 @@ impl Fitter<'_> {
             ));
         }
         let range = if strain_range {
-            self.stage_strain_range(map, &mut sp.rigs)?
+            self.stage_strain_range(m, &law, map, &mut sp.rigs)?
         } else {
             None
         };
         for (key, rig) in sp.rigs {
-            self.keep_rig(key, rig);
+            self.lab.keep_rig(key, rig);
         }
-        self.time_stage(map.dir.name(), t0);
-        self.stage_rms = err;
-        Ok(Some((shape, range)))
+        self.stats.time_stage(map.dir.name(), t0);
+        Ok(StageRun::Fitted(Box::new(StageFit {
+            law,
+            shape,
+            rms: err,
+            range,
+        })))
     }
 
     /// A tensile stage's problem: the rigs of its strips on a mesh level, set up for the
-    /// stage's map, with the strips' fitted curves, at the current law and thickness.
+    /// stage's map, with the strips' fitted curves, at material `m`.
     fn stage_problem<'s>(
         &mut self,
+        m: &Fitted,
         map: StageMap,
         strips: &'s [usize],
         level: (usize, usize),
     ) -> Result<StageProblem<'s>, FitError> {
         let mut rigs = Vec::new();
         for &s in strips {
-            let angle = self.prep.strips[s].angle_deg;
-            let (key, mut rig) = self.strip_rig(s, angle, level)?;
-            rig.set_wanted(Some(map.wanted(&self.law)));
-            rig.set_bending(self.bending);
+            let angle = self.ctx.prep.strips[s].angle_deg;
+            let (key, mut rig) = self.lab.strip_rig(self.ctx, m, s, angle, level)?;
+            rig.set_wanted(Some(map.wanted(&m.law)));
+            rig.set_bending(m.bending);
             rigs.push((key, rig));
         }
-        let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.used_curves(&[s])).collect();
+        let curves: Vec<Vec<usize>> = strips.iter().map(|&s| self.ctx.used_curves(&[s])).collect();
         let ncurves: usize = curves.iter().map(Vec::len).sum();
         let lens: Vec<usize> = curves
             .iter()
             .flatten()
-            .map(|&c| self.prep.curves[c].points.len())
+            .map(|&c| self.ctx.prep.curves[c].points.len())
             .collect();
         Ok(StageProblem {
             map,
             level,
-            base: self.law.clone(),
-            tau: self.thickness,
+            base: m.law.clone(),
+            tau: m.thickness,
             strips,
             curves,
             ncurves,
@@ -288,20 +184,19 @@ impl Fitter<'_> {
     }
 
     /// The stage's first evaluation and space-mapped start from p (see [`stage_start`]);
-    /// `false` when the trial is given up there (a raised degree whose mapped steps kept no
-    /// proposal, or a `screen`ed trial that gained too little), its work counted, its rigs
-    /// kept and its note logged.
+    /// the run's end when the trial is given up there (a raised degree whose mapped steps kept
+    /// no proposal, or a `screen`ed trial that gained too little), its work counted, its rigs
+    /// kept and its note logged; `None` when the stage goes on.
     fn mapped_stage_start(
         &mut self,
         sp: &mut StageProblem,
         p: &mut Vec<f64>,
         mode: StageMode,
         rel_decrease: f64,
-        screen: Option<(f64, f64)>,
-    ) -> Result<bool, FitError> {
+    ) -> Result<Option<StageRun>, FitError> {
         let (map, level) = (sp.map, sp.level);
         let fail = stage_failed(map, level);
-        let first_level = level == self.opts.ladder[0];
+        let first_level = level == self.ctx.opts.ladder[0];
         let stiffness_only = mode == StageMode::Stiffness && !map.c_known;
         // the stiffness alone needs no start from the homogeneous strip (it is one variable),
         // nor does a finer level's stage whose own Gauss–Newton step, from the Jacobian just
@@ -318,42 +213,39 @@ impl Fitter<'_> {
             }
         };
         let predict = !first_level && !stiffness_only;
-        let (m, rounds) = stage_start(sp, &self.prep, p, predict, rounds).map_err(fail)?;
+        let (m, rounds) = stage_start(sp, &self.ctx.prep, p, predict, rounds).map_err(fail)?;
         self.stats
             .record(Work::bootstrap(m.homogeneous_evaluations));
         let note = mapped_note(map, p, level, &m);
         // a trial screened at its mapped start: given up unless the shape error has not
         // risen or the rms error already fell by the degree gain there
-        let screened_out = match screen {
-            Some(s) => {
-                let gain = self.opts.degree_gain;
-                let out = screen_trial(sp, &self.prep, p, m.after, s, gain).map_err(fail)?;
-                if out.is_some() {
-                    self.screened = out;
-                }
-                out.is_some()
+        let screened = match mode {
+            StageMode::Screened { shape, rms } => {
+                let gain = self.ctx.opts.degree_gain;
+                let s = (shape, rms);
+                screen_trial(sp, &self.ctx.prep, p, m.after, s, gain).map_err(fail)?
             }
-            None => false,
+            _ => None,
         };
-        if (mode == StageMode::Raise && m.kept == 0) || screened_out {
+        if (mode == StageMode::Raise && m.kept == 0) || screened.is_some() {
             self.stats.record(sp.counts.work());
-            self.log_degree(note);
+            self.journal.log_degree(note);
             for (key, rig) in std::mem::take(&mut sp.rigs) {
-                self.keep_rig(key, rig);
+                self.lab.keep_rig(key, rig);
             }
-            return Ok(false);
+            return Ok(Some(StageRun::GivenUp(screened)));
         }
         if rounds > 0 {
             self.journal.degree(note);
         }
-        Ok(true)
+        Ok(None)
     }
 
-    /// The stage's start from the current law, the tension–shear coupling moved back from a
-    /// saturated bound (and said so).
-    fn unsaturated_start(&mut self, map: StageMap) -> Vec<f64> {
-        let p = map.encode_start(&self.law);
-        if p != map.encode(&self.law) {
+    /// The stage's start from `law`, the tension–shear coupling moved back from a saturated
+    /// bound (and said so).
+    fn unsaturated_start(&mut self, law: &Orthotropic, map: StageMap) -> Vec<f64> {
+        let p = map.encode_start(law);
+        if p != map.encode(law) {
             self.journal.say(&format!(
                 "{}: the tension–shear coupling starts at {:.0} % of its bound, which it had reached (tanh is flat there, and the stage could not move it back)",
                 map.dir.name(),
@@ -366,7 +258,7 @@ impl Fitter<'_> {
     /// At the stage's optimum p: records the standard errors and the linearisation from the
     /// Jacobian computed there, and returns the shape error (`err`, the rms error, where p has
     /// no evaluation).
-    fn stage_optimum(&mut self, sp: &StageProblem, p: &[f64], err: f64) -> f64 {
+    fn stage_optimum(&mut self, sp: &StageProblem, p: &[f64], err: f64, law: &Orthotropic) -> f64 {
         let (map, lens) = (sp.map, &sp.lens[..]);
         let shape = sp
             .seen
@@ -374,22 +266,25 @@ impl Fitter<'_> {
             .rev()
             .find(|(q, _, _)| *q == p)
             .map_or(err, |(_, r, _)| {
-                super::shape_error(lens, &super::surrogate::unweight(r, lens, self.prep.misfit))
+                super::shape_error(
+                    lens,
+                    &super::surrogate::unweight(r, lens, self.ctx.prep.misfit),
+                )
             });
         // standard errors at the optimum, from the Jacobian computed there
         if let Some((r, j)) = super::uncertainty::at_optimum(&sp.seen, p) {
-            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, &self.law);
+            let errors = super::uncertainty::stage_errors(&map, p, j, r, lens, law);
             self.evidence
                 .uncertainty
                 .push((map.dir, p.to_vec(), errors));
             let tau = sp.tau;
-            let offaxis = (map.coupling && self.law.coupling.is_some()).then(|| {
-                super::uncertainty::offaxis_rows(&self.prep, &self.law, tau, &map, p, sp.strips)
+            let offaxis = (map.coupling && law.coupling.is_some()).then(|| {
+                super::uncertainty::offaxis_rows(&self.ctx.prep, law, tau, &map, p, sp.strips)
             });
             self.evidence
                 .linearised
                 .push(super::mesh_check::Linearised::tensile(
-                    &map, p, &self.law, sp.strips, sp.level, j, lens, offaxis,
+                    &map, p, law, sp.strips, sp.level, j, lens, offaxis,
                 ));
         }
         shape
@@ -426,12 +321,12 @@ impl Fitter<'_> {
         strips
             .iter()
             .map(|&s| {
-                let strip = &self.prep.strips[s];
-                if strip.refine == 0 {
+                let strip = &self.ctx.prep.strips[s];
+                if self.lab.meshes.of_strip(s) == 0 {
                     format!("{}°", strip.angle_deg)
                 } else {
                     let m = super::rigs::strip_mesh(
-                        self.strip_level(s, level),
+                        self.lab.meshes.strip_level(s, level),
                         strip.width,
                         strip.length,
                     );
@@ -441,20 +336,22 @@ impl Fitter<'_> {
             .collect()
     }
 
-    /// The strains the stage's strips exercise at the fitted law.
+    /// The strains the stage's strips exercise at `law` (with `m`'s thickness and bending).
     fn stage_strain_range(
         &mut self,
+        m: &Fitted,
+        law: &Orthotropic,
         map: StageMap,
         rigs: &mut [(RigKey, StripRig)],
     ) -> Result<Option<StrainRange>, FitError> {
         let mut range: Option<StrainRange> = None;
-        let law = self.law.clone();
         for (_, rig) in rigs {
-            self.run_rig(rig, &law, false)
-                .map_err(|source| FitError::Scene {
+            super::rigs::run_rig(rig, law, m, self.stats, false).map_err(|source| {
+                FitError::Scene {
                     stage: format!("{} strips at the fit", map.dir.name()),
                     source,
-                })?;
+                }
+            })?;
             if let Some((lo, hi)) = rig.strain_range() {
                 let r = range.get_or_insert((lo, hi));
                 for i in 0..3 {
@@ -465,105 +362,6 @@ impl Fitter<'_> {
         }
         Ok(range)
     }
-
-    /// Forces of every fitted curve on a mesh level at the current material (for the
-    /// ladder's change measure).
-    pub(super) fn fitted_forces(
-        &mut self,
-        strips: &[usize],
-        level: (usize, usize),
-    ) -> Result<Vec<f64>, FitError> {
-        let jobs: Vec<(usize, f64)> = strips
-            .iter()
-            .map(|&s| (s, self.prep.strips[s].angle_deg))
-            .collect();
-        let nodes = self.predict_many(&jobs, level)?;
-        let mut out = Vec::new();
-        for (&s, node) in strips.iter().zip(&nodes) {
-            for c in self.used_curves(&[s]) {
-                out.extend(self.curve_forces(c, node));
-            }
-        }
-        Ok(out)
-    }
-}
-
-/// Bootstrap: degrees and initial guesses from the homogeneous strip, for every direction
-/// with fitted strips; defaults (with notes) for the others.
-pub(super) fn bootstrap_all(
-    f: &mut Fitter,
-    maps: &[StageMap],
-    strips: &[Vec<usize>],
-) -> Vec<Vec<f64>> {
-    let t0 = Instant::now();
-    f.journal.say("bootstrap on the homogeneous-strain strip");
-    let mut shear_candidates = Vec::new();
-    for k in 0..2 {
-        let curves = f.used_curves(&strips[k]);
-        if !curves.is_empty() {
-            let (q, _) = f.bootstrap(maps[k], &curves);
-            let mut law = f.law.clone();
-            maps[k].decode(&q, &mut law);
-            f.law = law;
-        }
-    }
-    let known = &f.data.known;
-    match (strips[0].is_empty(), strips[1].is_empty()) {
-        (true, false) if known.a11.is_none() => {
-            f.law.a11 = f.law.a22;
-            f.law.warp = f.law.weft.clone();
-            f.journal
-                .note("warp not fitted (no 90° test): taken equal to the weft".into());
-        }
-        (false, true) if known.a22.is_none() => {
-            f.law.a22 = f.law.a11;
-            f.law.weft = f.law.warp.clone();
-            f.journal
-                .note("weft not fitted (no 0° test): taken equal to the warp".into());
-        }
-        (true, true) => f.journal.note(
-            "warp and weft not fitted (no 0° or 90° test): a11 and a22 as given in [known], linear"
-                .into(),
-        ),
-        _ => {}
-    }
-    // a yarn law whose stress stops rising a little past the tests (a `--degree` the
-    // bootstrap kept whatever it does, a softening degree 1) is cut off below that
-    for map in &maps[..2] {
-        let note = super::plausible::cut_before_fall(&mut f.law, *map);
-        f.law_note(note);
-    }
-    f.a12.apply(&mut f.law);
-    // the homogeneous strip shears freely where a clamped strip cannot: away from 45° (where
-    // the two agree best) it misjudges the strip badly (a shape error of 12–18 % over 22.5°,
-    // 45° and 67.5° on the bundled fabrics, with starts the shell could not solve), so the
-    // shear is bootstrapped on the strips closest to 45° only; the shell stages use them all
-    let nearest = strips[2]
-        .iter()
-        .map(|&s| (f.prep.strips[s].angle_deg - 45.0).abs())
-        .fold(f64::INFINITY, f64::min);
-    let bias: Vec<usize> = strips[2]
-        .iter()
-        .copied()
-        .filter(|&s| (f.prep.strips[s].angle_deg - 45.0).abs() <= nearest + 1e-9)
-        .collect();
-    let shear = f.used_curves(&bias);
-    if !shear.is_empty() {
-        let (q, all) = f.bootstrap(maps[2], &shear);
-        let mut law = f.law.clone();
-        maps[2].decode(&q, &mut law);
-        f.law = law;
-        shear_candidates = all;
-    } else if f.data.known.g12.is_none() {
-        f.law.g12 = 0.02 * f.law.a11.min(f.law.a22);
-        let g12 = f.law.g12;
-        f.journal.note(format!(
-            "{}: linear, G12 = 2 % of min(a11, a22) = {g12:.4e} Pa",
-            super::shapes::SHEAR_ASSUMED
-        ));
-    }
-    f.time_stage("bootstrap", t0);
-    shear_candidates
 }
 
 /// The log line of a stage's space-mapped start `m` at p.

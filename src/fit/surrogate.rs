@@ -304,7 +304,6 @@ mod tests {
                 curves: (0..repeats).collect(),
                 nodes: elong,
                 at_points: true,
-                refine: 0,
             }],
             notes: Vec::new(),
             misfit: Default::default(),

@@ -441,7 +441,6 @@ mod tests {
             curves: Vec::new(),
             nodes: (1..=8).map(|k| 0.075 * 0.05 * k as f64 / 8.0).collect(),
             at_points: true,
-            refine: 0,
         };
         let prep = Prepared {
             curves: Vec::new(),

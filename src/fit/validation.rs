@@ -11,33 +11,37 @@
 //! thickness; a12 and G12 separately only through a measured Poisson ratio or a test beyond
 //! strips.
 
+use super::journal::Journal;
 use super::map::A12Rule;
 use super::preprocess::Curve;
 use super::tolerances::INTERPOLATION_TOL;
-use super::{FitError, Fitter, TestOutcome, Work};
+use super::{Bench, Context, FitError, Fitted, TestOutcome, Work};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
 
-impl Fitter<'_> {
+impl Bench<'_, '_> {
     /// Mean |relative error| of curve `c` with its strip cut at `angle` on a mesh level, and
     /// the model forces at its points.
     fn curve_error(
         &mut self,
+        m: &Fitted,
         c: usize,
         angle: f64,
         level: (usize, usize),
     ) -> Result<(f64, Vec<f64>), FitError> {
-        let s = self.prep.curves[c].strip;
-        let node = self.predict(s, angle, level)?;
-        let model = self.curve_forces(c, &node);
-        Ok((self.curve_fit_error(c, &model), model))
+        let s = self.ctx.prep.curves[c].strip;
+        let node = self
+            .lab
+            .predict(self.ctx, m, self.stats, (s, angle, level))?;
+        let model = self.ctx.curve_forces(c, &node);
+        Ok((self.ctx.curve_fit_error(c, &model), model))
     }
 
     /// The misalignment Δθ ∈ [−m, m] (m = `max_misalign_deg`) that best explains curve `c`:
     /// its squared relative error on a grid of at most 1° (strips shared by every repeat),
     /// refined by the parabola through the best grid point and its neighbours.
-    fn misalignment(&mut self, c: usize, level: (usize, usize)) -> Option<f64> {
-        let m = self.opts.max_misalign_deg;
+    fn misalignment(&mut self, fm: &Fitted, c: usize, level: (usize, usize)) -> Option<f64> {
+        let m = self.ctx.opts.max_misalign_deg;
         if m <= 0.0 {
             return None;
         }
@@ -45,15 +49,17 @@ impl Fitter<'_> {
         let grid: Vec<f64> = (0..=n)
             .map(|k| -m + 2.0 * m * k as f64 / n as f64)
             .collect();
-        let angle = self.prep.curves[c].angle_deg;
-        let s = self.prep.curves[c].strip;
+        let angle = self.ctx.prep.curves[c].angle_deg;
+        let s = self.ctx.prep.curves[c].strip;
         // solve the grid's strips side by side; a failed one costs +∞ below
         let jobs: Vec<(usize, f64)> = grid.iter().map(|d| (s, angle + d)).collect();
-        let _ = self.predict_many(&jobs, level);
+        let _ = self
+            .lab
+            .predict_many(self.ctx, fm, self.stats, &jobs, level);
         let costs: Vec<f64> = grid
             .iter()
-            .map(|&d| match self.curve_error(c, angle + d, level) {
-                Ok((_, model)) => self.prep.curves[c]
+            .map(|&d| match self.curve_error(fm, c, angle + d, level) {
+                Ok((_, model)) => self.ctx.prep.curves[c]
                     .points
                     .iter()
                     .zip(&model)
@@ -79,21 +85,23 @@ impl Fitter<'_> {
     /// halfway between its nodes (first mesh level; a strip refined on its own mesh there, as
     /// its nodes were), strips solved side by side: (error, angle) of the worst strip, `None`
     /// where every strip is solved at its measured points (nothing is interpolated).
-    fn interpolation_error(&mut self) -> Result<Option<(f64, f64)>, FitError> {
+    fn interpolation_error(&mut self, m: &Fitted) -> Result<Option<(f64, f64)>, FitError> {
         use rayon::prelude::*;
-        let level = self.opts.ladder[0];
-        let jobs: Vec<(usize, f64)> = (0..self.prep.strips.len())
-            .filter(|&s| !self.prep.strips[s].at_points)
-            .map(|s| (s, self.prep.strips[s].angle_deg))
+        let level = self.ctx.opts.ladder[0];
+        let jobs: Vec<(usize, f64)> = (0..self.ctx.prep.strips.len())
+            .filter(|&s| !self.ctx.prep.strips[s].at_points)
+            .map(|s| (s, self.ctx.prep.strips[s].angle_deg))
             .collect();
         if jobs.is_empty() {
             return Ok(None);
         }
-        let nodes = self.predict_many(&jobs, level)?;
-        let material = self.material();
+        let nodes = self
+            .lab
+            .predict_many(self.ctx, m, self.stats, &jobs, level)?;
+        let material = m.material(self.ctx.data);
         let mut checks = Vec::new();
         for &(s, _) in &jobs {
-            let strip = &self.prep.strips[s];
+            let strip = &self.ctx.prep.strips[s];
             let mut mids = Vec::new();
             let mut prev = 0.0;
             for &e in &strip.nodes {
@@ -105,15 +113,15 @@ impl Fitter<'_> {
             // its own is compared with itself, not with the ladder's mesh, and a node rig set
             // up on an earlier ladder level keeps that level's centre-rule β: either
             // difference is discretisation error, not interpolation error)
-            let own = self.strip_level(s, level);
-            let key = self.rig_key(s, strip.angle_deg, own);
-            let node_rig = self.lab.rigs.get(&key);
+            let own = self.lab.meshes.strip_level(s, level);
+            let key = self.ctx.rig_key(s, strip.angle_deg, own);
+            let node_rig = self.lab.warm_rig(&key);
             t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
-            t.grading = self.opts.grading;
-            t.yarn_rule = self.strip_yarns(strip.angle_deg);
-            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio, |r| r.yarn_ratio());
+            t.grading = self.ctx.opts.grading;
+            t.yarn_rule = self.lab.strip_yarns(self.ctx.opts, strip.angle_deg);
+            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio(), |r| r.yarn_ratio());
             t.solver.rtol = super::FIT_RTOL;
-            t.solver.strategy = self.opts.strategy;
+            t.solver.strategy = self.ctx.opts.strategy;
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
@@ -130,7 +138,7 @@ impl Fitter<'_> {
             .collect();
         let mut worst = (0.0f64, 0.0);
         for (j, ((s, mids, _), run)) in checks.iter().zip(solved).enumerate() {
-            let strip = &self.prep.strips[*s];
+            let strip = &self.ctx.prep.strips[*s];
             let pts = run.map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
@@ -155,54 +163,75 @@ impl Fitter<'_> {
 }
 
 /// Every test's outcome at the final mesh level.
-pub(super) fn outcomes(f: &mut Fitter, last: (usize, usize)) -> Result<Vec<TestOutcome>, FitError> {
+pub(super) fn outcomes(
+    bench: &mut Bench,
+    m: &Fitted,
+    last: (usize, usize),
+) -> Result<Vec<TestOutcome>, FitError> {
     let mut tests = Vec::new();
-    f.journal.say("report: every curve at its nominal angle");
-    let jobs: Vec<(usize, f64)> = (0..f.prep.strips.len())
-        .map(|s| (s, f.prep.strips[s].angle_deg))
+    bench
+        .journal
+        .say("report: every curve at its nominal angle");
+    let jobs: Vec<(usize, f64)> = (0..bench.ctx.prep.strips.len())
+        .map(|s| (s, bench.ctx.prep.strips[s].angle_deg))
         .collect();
-    f.predict_many(&jobs, last)?;
+    bench
+        .lab
+        .predict_many(bench.ctx, m, bench.stats, &jobs, last)?;
     // each strip's discretisation error: the last level against one with half the faces
     // each way, at the slowest order measured on the cage (the 45° strip's clamped corners:
     // 2 graded, 1.2 uniform; `mesh_check::order`), so it errs on the large side for 0° and 90°
-    let order = f.mesh_order();
+    let order = super::mesh_check::mesh_order(bench.lab, bench.ctx, m);
     let half = ((last.0 / 2).max(1), (last.1 / 2).max(1));
-    f.journal.say(&format!(
+    bench.journal.say(&format!(
         "report: mesh-error estimate (every strip again on {}x{})",
         half.0, half.1
     ));
-    let coarse = f.predict_many(&jobs, half).ok();
-    for c in 0..f.prep.curves.len() {
-        tests.push(curve_outcome(f, c, last, coarse.as_deref(), order)?);
+    let coarse = bench
+        .lab
+        .predict_many(bench.ctx, m, bench.stats, &jobs, half)
+        .ok();
+    for c in 0..bench.ctx.prep.curves.len() {
+        tests.push(curve_outcome(bench, m, c, last, coarse.as_deref(), order)?);
     }
-    interpolation_note(f);
-    bend_outcomes(f, last, &mut tests)?;
+    interpolation_note(bench, m);
+    bend_outcomes(bench, m, last, &mut tests)?;
     Ok(tests)
 }
 
 /// The outcome of curve `c` on the last level; `coarse`: every strip's node forces on half
 /// the faces, for its mesh-error estimate at convergence order `order`.
 fn curve_outcome(
-    f: &mut Fitter,
+    bench: &mut Bench,
+    m: &Fitted,
     c: usize,
     last: (usize, usize),
     coarse: Option<&[Vec<f64>]>,
     order: f64,
 ) -> Result<TestOutcome, FitError> {
-    let curve = f.prep.curves[c].clone();
-    let data = f.data;
+    let curve = bench.ctx.prep.curves[c].clone();
+    let data = bench.ctx.data;
     let t = &data.tensile[curve.test];
-    let (err, model) = f.curve_error(c, curve.angle_deg, last)?;
-    let (scale, scaled) = repeat_scale(f, &curve, &t.curve.display().to_string(), &model);
-    let strip = &f.prep.strips[curve.strip];
-    let mesh = super::rigs::strip_mesh(f.strip_level(curve.strip, last), strip.width, strip.length);
+    let (err, model) = bench.curve_error(m, c, curve.angle_deg, last)?;
+    let (scale, scaled) = repeat_scale(
+        bench.journal,
+        &curve,
+        &t.curve.display().to_string(),
+        &model,
+    );
+    let strip = &bench.ctx.prep.strips[curve.strip];
+    let mesh = super::rigs::strip_mesh(
+        bench.lab.meshes.strip_level(curve.strip, last),
+        strip.width,
+        strip.length,
+    );
     let mesh_error = coarse.map(|nodes| {
-        let rough = f.curve_forces(c, &nodes[curve.strip]);
+        let rough = bench.ctx.curve_forces(c, &nodes[curve.strip]);
         super::refine::curve_mesh_error(&model, &rough, order)
     });
     if let Some(m) = mesh_error {
         if m > super::refine::mesh_tolerance(err) {
-            f.journal.note(format!(
+            bench.journal.note(format!(
                 "warning: {} ({}°): estimated mesh error {:.2} % on {}x{} is above a third of its fit error ({:.2} %) and 0.3 %, after {} of at most {} doublings of its own mesh: refine the ladder (--mesh-ladder)",
                 t.curve.display(),
                 curve.angle_deg,
@@ -210,16 +239,17 @@ fn curve_outcome(
                 mesh.0,
                 mesh.1,
                 100.0 * err,
-                strip.refine,
+                bench.lab.meshes.of_strip(curve.strip),
                 super::refine::MAX_DOUBLINGS
             ));
         }
     }
-    let (misalign, aligned) = if curve.role == Role::Validation && f.opts.max_misalign_deg > 0.0 {
-        misalignment_check(f, c, &curve, &t.curve.display().to_string(), last)?
-    } else {
-        (None, None)
-    };
+    let (misalign, aligned) =
+        if curve.role == Role::Validation && bench.ctx.opts.max_misalign_deg > 0.0 {
+            misalignment_check(bench, m, c, &curve, &t.curve.display().to_string(), last)?
+        } else {
+            (None, None)
+        };
     Ok(TestOutcome {
         kind: match curve.role {
             Role::Fit => "tensile",
@@ -250,7 +280,7 @@ fn curve_outcome(
 
 /// The scale s with measured ≈ s·model over the curve's points, and the mean error left
 /// after it; points where the model has no force (a saddle) are left out, with a note.
-fn repeat_scale(f: &mut Fitter, curve: &Curve, name: &str, model: &[f64]) -> (f64, f64) {
+fn repeat_scale(journal: &mut Journal, curve: &Curve, name: &str, model: &[f64]) -> (f64, f64) {
     // q = model/measured; the scale s with measured ≈ s·model minimises Σ(s q − 1)²:
     // s = Σq/Σq²
     let q: Vec<f64> = curve
@@ -262,7 +292,7 @@ fn repeat_scale(f: &mut Fitter, curve: &Curve, name: &str, model: &[f64]) -> (f6
         .collect();
     let excluded = model.len() - q.len();
     if excluded > 0 {
-        f.journal.note(format!(
+        journal.note(format!(
             "warning: {name} ({}°): {excluded} of {} points excluded from its errors: the model's equilibrium there is a saddle (the flat strip would wrinkle), whose force is not what the test measures",
             curve.angle_deg,
             model.len()
@@ -276,26 +306,28 @@ fn repeat_scale(f: &mut Fitter, curve: &Curve, name: &str, model: &[f64]) -> (f6
 /// A validation curve's misalignment diagnostic: the cut angle's offset that fits it best
 /// and the error there, when found (noted when it sits on its bound).
 fn misalignment_check(
-    f: &mut Fitter,
+    bench: &mut Bench,
+    m: &Fitted,
     c: usize,
     curve: &Curve,
     name: &str,
     last: (usize, usize),
 ) -> Result<(Option<f64>, Option<f64>), FitError> {
     let (mut misalign, mut aligned) = (None, None);
-    f.journal
+    bench
+        .journal
         .say(&format!("report: misalignment diagnostic of {name}"));
     // a diagnostic: on the first level's strips, whatever this one's own mesh
-    f.ladder_meshes = true;
-    let found = f.misalignment(c, f.opts.ladder[0]);
-    f.ladder_meshes = false;
+    bench.lab.meshes.set_ladder(true);
+    let found = bench.misalignment(m, c, bench.ctx.opts.ladder[0]);
+    bench.lab.meshes.set_ladder(false);
     if let Some(d) = found {
-        let (e, _) = f.curve_error(c, curve.angle_deg + d, last)?;
+        let (e, _) = bench.curve_error(m, c, curve.angle_deg + d, last)?;
         misalign = Some(d);
         aligned = Some(e);
-        let m = f.opts.max_misalign_deg;
+        let m = bench.ctx.opts.max_misalign_deg;
         if (d.abs() - m).abs() < 1e-9 {
-            f.journal.note(format!(
+            bench.journal.note(format!(
                 "warning: validation {}° ({name}): the misalignment diagnostic sits on its ±{m}° bound: the model, not the cut, is likely off",
                 curve.angle_deg,
             ));
@@ -305,10 +337,11 @@ fn misalignment_check(
 }
 
 /// The note on the model curves' interpolation between nodes (checked halfway between them).
-fn interpolation_note(f: &mut Fitter) {
-    let exact = f.prep.strips.iter().filter(|s| s.at_points).count();
-    if exact < f.prep.strips.len() {
-        f.journal
+fn interpolation_note(bench: &mut Bench, m: &Fitted) {
+    let exact = bench.ctx.prep.strips.iter().filter(|s| s.at_points).count();
+    if exact < bench.ctx.prep.strips.len() {
+        bench
+            .journal
             .say("report: interpolation check (solves halfway between the nodes)");
     }
     let at_points = if exact == 0 {
@@ -316,55 +349,59 @@ fn interpolation_note(f: &mut Fitter) {
     } else {
         format!(
             "; {exact} of {} strips solved at their measured elongations (no more of them than nodes), not interpolated",
-            f.prep.strips.len()
+            bench.ctx.prep.strips.len()
         )
     };
-    match f.interpolation_error() {
-        Ok(Some(worst)) => f.journal.note(format!(
+    match bench.interpolation_error(m) {
+        Ok(Some(worst)) => bench.journal.note(format!(
         "model curves solved at {} nodes per strip and interpolated: largest interpolation error {:.3} % ({}° strip, checked halfway between nodes on {}×{}{}){}{at_points}",
-        f.opts.nodes,
+        bench.ctx.opts.nodes,
         100.0 * worst.0,
         worst.1,
-        f.opts.ladder[0].0,
-        f.opts.ladder[0].1,
-        if f.prep.strips.iter().any(|s| s.refine > 0) && !f.ladder_meshes {
+        bench.ctx.opts.ladder[0].0,
+        bench.ctx.opts.ladder[0].1,
+        if bench.lab.meshes.any_strip() && !bench.lab.meshes.ladder() {
             ", strips refined on their own meshes there"
         } else {
             ""
         },
         if worst.0 > INTERPOLATION_TOL { "; warning: above 0.1 %, raise the node count" } else { "" }
     )),
-        Ok(None) => f.journal.note(
+        Ok(None) => bench.journal.note(
             "model curves solved at every measured elongation (no strip has more of them than nodes): nothing interpolated, no interpolation error".to_string(),
         ),
-        Err(e) => f.journal.note(format!("warning: the interpolation check could not be made: {e}")),
+        Err(e) => bench.journal.note(format!("warning: the interpolation check could not be made: {e}")),
     }
 }
 
 /// The bend tests' outcomes, appended to `tests` (predicted on the last level first when the
 /// thickness is known and nothing fits them).
 fn bend_outcomes(
-    f: &mut Fitter,
+    bench: &mut Bench,
+    m: &Fitted,
     last: (usize, usize),
     tests: &mut Vec<TestOutcome>,
 ) -> Result<(), FitError> {
-    let data = f.data;
-    if f.bend_angles.len() != data.bend.len() {
+    let data = bench.ctx.data;
+    let mut angles = bench.evidence.bend_angles.clone();
+    if angles.len() != data.bend.len() {
         // thickness known: the bends are predicted, not fitted
-        f.bend_angles.clear();
+        angles.clear();
         for b in &data.bend {
             let mut bend = CantileverBend::new(b.width, b.overhang, b.angle_deg);
-            bend.yarn_rule = f.opts.yarn_rule; // a bend reads `auto` as the full rule
-            bend.mesh = super::thickness::bend_mesh(f.bend_level(last), b);
-            let r = bend.run(&f.material()).map_err(|source| FitError::Scene {
-                stage: format!("predicting the {}° cantilever", b.angle_deg),
-                source,
-            })?;
-            f.bend_angles.push(r.drape_angle_deg);
+            bend.yarn_rule = bench.ctx.opts.yarn_rule; // a bend reads `auto` as the full rule
+            bend.mesh = super::thickness::bend_mesh(bench.lab.meshes.bend_level(last), b);
+            let r = bend
+                .run(&m.material(bench.ctx.data))
+                .map_err(|source| FitError::Scene {
+                    stage: format!("predicting the {}° cantilever", b.angle_deg),
+                    source,
+                })?;
+            angles.push(r.drape_angle_deg);
         }
     }
-    let fitted = f.own_bending || data.known.thickness.is_none();
-    for (b, &angle) in data.bend.iter().zip(&f.bend_angles) {
+    let fitted = bench.ctx.own_bending || data.known.thickness.is_none();
+    for (b, &angle) in data.bend.iter().zip(&angles) {
         tests.push(TestOutcome {
             kind: "bend",
             angle_deg: b.angle_deg,
@@ -388,9 +425,9 @@ fn bend_outcomes(
 }
 
 /// Which quantities the data determined and which were assumed, with their values.
-pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> {
-    let l = &f.law;
-    let tau = f.thickness;
+pub(super) fn identifiability(ctx: &Context, m: &Fitted, strips: &[Vec<usize>]) -> Vec<String> {
+    let l = &m.law;
+    let tau = m.thickness;
     let e1 = l.a11 - l.a12 * l.a12 / l.a22;
     let e2 = l.a22 - l.a12 * l.a12 / l.a11;
     let nu12 = l.a12 / l.a22;
@@ -405,7 +442,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             "assumed"
         }
     };
-    let k = &f.data.known;
+    let k = &ctx.data.known;
     out.push(format!(
         "E1·τ = {:.5e} N/m (warp, small strain): {}",
         e1 * tau,
@@ -421,7 +458,7 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
         (1.0 / g - 2.0 * nu12 / e1) / tau,
         source(!strips[2].is_empty(), k.g12.is_some())
     ));
-    out.push(match f.a12 {
+    out.push(match ctx.a12 {
         A12Rule::HalfMin => format!(
             "a12 = {:.4e} Pa (ν12 = {nu12:.3}): assumed, ½·min(a11, a22) (the paper's default); strips do not determine it: another a12 with G12 changed to keep 1/G − 2ν12/E1 fits them alike at small strain, so G12 = {:.4e} Pa is tied to this choice (give [known] poisson_12 or a12_pa to pin it)",
             l.a12, l.g12
@@ -432,8 +469,8 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
         ),
         A12Rule::Fixed(v) => format!("a12 = {v:.4e} Pa: known; G12 = {:.4e} Pa determined with it", l.g12),
     });
-    if let Some(b) = f.bending {
-        let off_axis = f
+    if let Some(b) = m.bending {
+        let off_axis = ctx
             .data
             .bend
             .iter()
@@ -454,9 +491,41 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             )
         });
     }
-    // the tension–shear coupling: what the off-axis strips said of it
+    out.extend(coupling_line(&m.coupling, l.coupling));
+    out.push(thickness_line(ctx, m));
+    out
+}
+
+/// What determined the thickness of material `m`.
+fn thickness_line(ctx: &Context, m: &Fitted) -> String {
+    if ctx.data.known.thickness.is_some() {
+        format!("thickness τ = {:.4} mm: known", m.thickness * 1e3)
+    } else if m.bending.is_some() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
+            m.thickness * 1e3
+        )
+    } else if ctx.data.bend.is_empty() {
+        format!(
+            "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
+            m.thickness * 1e3
+        )
+    } else {
+        format!(
+            "thickness τ = {:.4} mm: determined by the bends (bending rigidity a·τ³/12 with a·τ held)",
+            m.thickness * 1e3
+        )
+    }
+}
+
+/// What the off-axis strips said of the tension–shear coupling: its `outcome`, `kappa` the
+/// law's factors.
+fn coupling_line(
+    outcome: &super::coupling::CouplingOutcome,
+    kappa: Option<crate::material::ShearCoupling>,
+) -> Option<String> {
     use super::coupling::CouplingOutcome;
-    let coupling = match (&f.coupling, l.coupling) {
+    match (outcome, kappa) {
         (CouplingOutcome::Kept { without, with }, Some(c)) => Some(format!(
             "tension–shear coupling κ1 = {:.4}, κ2 = {:.4}: determined by the off-axis strips at several angles (the shear stage's {without} without it, {with} with it; standard errors in [fit.uncertainty]), together with η4's exponents, which it trades off against along the strips' paths: what the strips pin down is each off-axis strip's stress (bias_stress_* in [fit.mesh_check])",
             c.warp, c.weft
@@ -468,25 +537,5 @@ pub(super) fn identifiability(f: &Fitter, strips: &[Vec<usize>]) -> Vec<String> 
             "tension–shear coupling: assumed absent (the separable law): one off-axis angle cannot tell it from the shear law's own nonlinearity (fit two or more off-axis angles to test it)".to_string(),
         ),
         _ => None,
-    };
-    out.extend(coupling);
-    out.push(if k.thickness.is_some() {
-        format!("thickness τ = {:.4} mm: known", tau * 1e3)
-    } else if f.bending.is_some() {
-        format!(
-            "thickness τ = {:.4} mm: assumed (the measured value): with bending of its own it only splits the strips' a·τ",
-            tau * 1e3
-        )
-    } else if f.data.bend.is_empty() {
-        format!(
-            "thickness τ = {:.4} mm: assumed (the measured value; no bend tests): strips determine a·τ only",
-            tau * 1e3
-        )
-    } else {
-        format!(
-            "thickness τ = {:.4} mm: determined by the bends (bending rigidity a·τ³/12 with a·τ held)",
-            tau * 1e3
-        )
-    });
-    out
+    }
 }

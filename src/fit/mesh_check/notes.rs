@@ -1,12 +1,18 @@
 //! The mesh check's line in the fit's notes and progress.
 
 use super::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_PARAM_TOL};
-use crate::fit::Fitter;
+use crate::fit::{Bench, Fitted};
 
-impl Fitter<'_> {
-    /// The check's line in the notes, a warning when the fit is not mesh-independent (a
-    /// parameter moving by 1 % or more, a curve by 0.3 %, a drape angle by 0.1°).
-    pub(in crate::fit) fn mesh_check_notes(&mut self, last: (usize, usize), m: &MeshCheck) {
+impl Bench<'_, '_> {
+    /// The check's line in the notes, a warning when the fit of material `fitted` is not
+    /// mesh-independent (a parameter moving by 1 % or more, a curve by 0.3 %, a drape angle
+    /// by 0.1°).
+    pub(in crate::fit) fn mesh_check_notes(
+        &mut self,
+        fitted: &Fitted,
+        last: (usize, usize),
+        m: &MeshCheck,
+    ) {
         let bad = !m.passes();
         let law = if m.law_change >= MESH_PARAM_TOL {
             format!(
@@ -24,7 +30,7 @@ impl Fitter<'_> {
                 "estimated from {}x{} at order {}; --mesh-check fine solves on {}x{}",
                 m.solved_on.0,
                 m.solved_on.1,
-                self.mesh_order(),
+                super::mesh_order(self.lab, self.ctx, fitted),
                 m.mesh.0,
                 m.mesh.1
             )
@@ -32,7 +38,7 @@ impl Fitter<'_> {
         let angles = m
             .angle_change_deg
             .map_or(String::new(), |a| format!(", drape angles by {a:.3}°"));
-        let own = if self.prep.strips.iter().any(|s| s.refine > 0) {
+        let own = if self.lab.meshes.any_strip() {
             " (and every strip refined on its own mesh once more)"
         } else {
             ""
@@ -52,7 +58,7 @@ impl Fitter<'_> {
         // a curve alone failing, where `own` meshes left it: the strict rule refines its strip
         let curve_only = m.change < MESH_PARAM_TOL
             && m.angle_change_deg.is_none_or(|a| a < MESH_ANGLE_TOL_DEG)
-            && self.opts.test_meshes == crate::fit::TestMeshes::Own;
+            && self.ctx.opts.test_meshes == crate::fit::TestMeshes::Own;
         let line = if bad && curve_only {
             format!("{line}: the fit is not mesh-independent; --test-meshes strict refines the strip of that curve (or add the finer level, --mesh-ladder)")
         } else if bad {
