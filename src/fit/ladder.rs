@@ -244,7 +244,10 @@ fn fitted_forces(
     Ok(out)
 }
 
-/// A tensile stage from the fitted material, its optimum applied to the material.
+/// A tensile stage from the fitted material, its optimum applied to the material, and the
+/// stage's cut-off kept below any stress peak ([`super::plausible::keep_rising`]): every
+/// optimum applied (the ladder's, the joint sweep's shear again, a refined strip's refit) keeps
+/// the law's stress rising up to its cut-off, as a material file must.
 pub(super) fn refit(
     f: &mut Fitter,
     map: StageMap,
@@ -259,6 +262,8 @@ pub(super) fn refit(
         .fitted()
         .expect("a stage that is not a trial always runs");
     f.fitted.law = fit.law.clone();
+    let note = super::plausible::keep_rising(&mut f.fitted.law, map.dir);
+    f.journal.law_note(note);
     Ok(fit)
 }
 
