@@ -199,6 +199,22 @@ pub fn monotone_limit(q0: f64, q1: f64, q2: f64) -> Option<f64> {
     }
 }
 
+/// Richardson's estimate of a curve's relative discretisation error from two meshes at a known
+/// order `order` (the finer `fine`, the other with half its faces each way, `rough`): the mean
+/// |(fine − rough)/fine| over the points where it is finite, divided by 2ᵖ − 1. Two levels
+/// suffice where the order is known (the fitter's strips: the cage's measured order); with an
+/// unknown order, [`curve_errors`] estimates it from three.
+pub fn known_order_error(fine: &[f64], rough: &[f64], order: f64) -> f64 {
+    let d: Vec<f64> = fine
+        .iter()
+        .zip(rough)
+        .map(|(a, b)| (a - b) / a)
+        .filter(|v| v.is_finite())
+        .collect();
+    let mean = d.iter().map(|v| v.abs()).sum::<f64>() / d.len().max(1) as f64;
+    mean / (2f64.powf(order) - 1.0)
+}
+
 /// Estimated relative error of each of several curves of the same points (coarse to fine,
 /// each level twice as fine as the last): at each point the limit q∞ is extrapolated from
 /// the three finest levels as in [`analyse`], but only from a monotone triple (an

@@ -31,7 +31,7 @@ use super::map::StageMap;
 use super::mesh_check::{MeshCheck, MESH_ANGLE_TOL_DEG, MESH_CURVE_TOL, MESH_PARAM_TOL};
 use super::preprocess::Strip;
 use super::rigs::strip_mesh;
-use super::{mean_abs_finite, FitError, Fitter, StageMode};
+use super::{FitError, Fitter, StageMode};
 use crate::dataset::BendTest;
 use std::time::Instant;
 
@@ -78,10 +78,10 @@ pub(super) fn mesh_tolerance(fit_error: f64) -> f64 {
 }
 
 /// Richardson's estimate of a curve's discretisation error from its model forces on a mesh
-/// (`fine`) and on half its faces each way (`rough`), at order `order`.
+/// (`fine`) and on half its faces each way (`rough`), at order `order`
+/// ([`crate::converge::known_order_error`]).
 pub(super) fn curve_mesh_error(fine: &[f64], rough: &[f64], order: f64) -> f64 {
-    let d: Vec<f64> = fine.iter().zip(rough).map(|(a, b)| (a - b) / a).collect();
-    mean_abs_finite(&d) / (2f64.powf(order) - 1.0)
+    crate::converge::known_order_error(fine, rough, order)
 }
 
 /// One strip's verdict: its worst curve's estimated mesh error and that curve's tolerance.
