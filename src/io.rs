@@ -141,6 +141,18 @@ pub fn shown(x: f64) -> String {
     num(rounded.parse().unwrap_or(x))
 }
 
+/// A TOML float with `decimals` fixed decimals, in TOML's own spellings where it is not finite
+/// (`nan`, `inf`, `-inf`: Rust prints `NaN`, which no TOML reader takes).
+pub fn toml_float(x: f64, decimals: usize) -> String {
+    if x.is_nan() {
+        "nan".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{x:.decimals$}")
+    }
+}
+
 /// A table cell: `decimals` fixed decimals for magnitudes below 1e9, exponent form above (a
 /// width typed as 1e300 prints as `1.0000e300`, not as 300 digits).
 pub fn cell(x: f64, decimals: usize) -> String {
@@ -154,6 +166,15 @@ pub fn cell(x: f64, decimals: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn toml_floats_read_back_even_where_not_finite() {
+        for x in [1.25, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let doc: toml::Table = format!("v = {}", toml_float(x, 4)).parse().unwrap();
+            let v = doc["v"].as_float().unwrap();
+            assert!(v == x || (v.is_nan() && x.is_nan()), "{x}: {v}");
+        }
+    }
 
     #[test]
     fn numbers_round_trip_in_few_characters() {

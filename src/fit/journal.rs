@@ -41,6 +41,12 @@ impl<'a> Journal<'a> {
         self.notes.push(note);
     }
 
+    /// Drops the notes that start with `prefix`: a warning that a later stage made untrue, or
+    /// one about to be given again.
+    pub(super) fn drop_notes(&mut self, prefix: &str) {
+        self.notes.retain(|n| !n.starts_with(prefix));
+    }
+
     /// A line of the degree log.
     pub(super) fn degree(&mut self, line: String) {
         self.degree_log.push(line);

@@ -3,6 +3,9 @@
 //! those forces are the solved defect of the mesh check ([`super::mesh_check`]), whose
 //! first-order refit says whether the level is needed at all (no determined parameter moving
 //! by 1 %, no curve by 0.3 %) and which stages it would move (the others are not refitted).
+//! A finer level at which a stage does not solve (a cantilever that the law fitted there
+//! cannot hold, a strip from every fallback start) is not kept: the fit goes on from the last
+//! level that solved, with a warning, and the mesh check reports what the finer level moves.
 
 use super::map::StageMap;
 use super::mesh_check::MeshCheck;
@@ -51,25 +54,56 @@ pub(super) fn ladder(
             last_check = check;
         }
         meshes.push(level);
+        let kept = (f.fitted.clone(), f.evidence.level_mark());
         let check = last_check.as_ref();
-        fit_level(f, maps, sets, strips, (li, level), check, shear_candidates)?;
-        if li == 0 && sets.joint.is_some() {
-            // the joint sweep: each yarn stiffness over the strips it moves, then the shear
-            // given them
-            super::joint::joint_stiffness(f, maps[0], 0, sets, level)?;
-            super::joint::joint_stiffness(f, maps[1], 1, sets, level)?;
-            if !strips[2].is_empty() {
-                f.journal
-                    .say("bias stage again, given the joint yarn stiffnesses");
-                refit(f, maps[2], &strips[2], level, false, StageMode::Full)?;
+        match level_stages(f, maps, sets, strips, (li, level), check, shear_candidates) {
+            Ok(()) => {}
+            Err(e) if li > 0 && e.is_solve_failure() => {
+                meshes.pop();
+                f.fitted = kept.0;
+                f.evidence.restore(kept.1);
+                f.evidence.ladder_check = last_check;
+                let note = format!(
+                    "warning: the {}×{} level is not kept ({e}): the fit stays on {}×{}, where every stage solved; the mesh check measures what the finer level would change",
+                    level.0, level.1, from.0, from.1
+                );
+                f.journal.say(&note);
+                f.journal.note(note);
+                break;
             }
+            Err(e) => return Err(e),
         }
-        super::pipeline::bend_stage(f, level)?;
         if li + 1 < opts.ladder.len() {
             previous = Some(fitted_forces(f, &all, level)?);
         }
     }
     Ok(meshes)
+}
+
+/// Every stage of one ladder level: the tensile stages, the joint sweep on the first level,
+/// and the bend stage.
+fn level_stages(
+    f: &mut Fitter,
+    maps: &mut [StageMap],
+    sets: &mut StageSets,
+    strips: &[Vec<usize>],
+    (li, level): (usize, (usize, usize)),
+    check: Option<&MeshCheck>,
+    shear_candidates: &[Vec<f64>],
+) -> Result<(), FitError> {
+    fit_level(f, maps, sets, strips, (li, level), check, shear_candidates)?;
+    if li == 0 && sets.joint.is_some() {
+        // the joint sweep: each yarn stiffness over the strips it moves, then the shear given
+        // them
+        super::joint::joint_stiffness(f, maps[0], 0, sets, level)?;
+        super::joint::joint_stiffness(f, maps[1], 1, sets, level)?;
+        if !strips[2].is_empty() {
+            f.journal
+                .say("bias stage again, given the joint yarn stiffnesses");
+            refit(f, maps[2], &strips[2], level, false, StageMode::Full)?;
+        }
+    }
+    super::pipeline::bend_stage(f, level)
 }
 
 /// Whether the levels from `level` on are skipped (and said so): the last solved refit change

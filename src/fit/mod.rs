@@ -111,6 +111,23 @@ pub enum FitError {
     },
 }
 
+impl FitError {
+    /// Whether the error is an equilibrium that did not solve (in a scene or a stage), not bad
+    /// data, a limit or a set-up that failed.
+    pub fn is_solve_failure(&self) -> bool {
+        matches!(
+            self,
+            FitError::Scene {
+                source: SceneError::Solve { .. },
+                ..
+            } | FitError::Stage {
+                source: SceneError::Solve { .. },
+                ..
+            }
+        )
+    }
+}
+
 /// One test's outcome.
 #[derive(Clone, Debug)]
 pub struct TestOutcome {
@@ -344,7 +361,31 @@ impl Fitted {
     }
 }
 
+/// What the evidence held before a ladder level, to go back to where the level is not kept.
+struct LevelMark {
+    records: (usize, usize),
+    stage_errors: Vec<uncertainty::ParamError>,
+    bend_angles: Vec<f64>,
+}
+
 impl Evidence {
+    /// The evidence before a ladder level ([`Evidence::restore`]).
+    fn level_mark(&self) -> LevelMark {
+        LevelMark {
+            records: self.marks(),
+            stage_errors: self.stage_errors.clone(),
+            bend_angles: self.bend_angles.clone(),
+        }
+    }
+
+    /// Back to the evidence of `mark`: the records of the level after it dropped.
+    fn restore(&mut self, mark: LevelMark) {
+        self.uncertainty.truncate(mark.records.0);
+        self.linearised.truncate(mark.records.1);
+        self.stage_errors = mark.stage_errors;
+        self.bend_angles = mark.bend_angles;
+    }
+
     /// How many standard errors and linearisations the stages have left: a trial's records
     /// are those past these marks.
     fn marks(&self) -> (usize, usize) {

@@ -271,18 +271,36 @@ fn shapes_then_bends(
 
 /// The bend stage on a mesh level, where the bends fit anything: the bends' own rigidities
 /// (`--bending`), or the thickness unless it is known. Its optimum becomes the fitted
-/// material and its evidence the fit's.
+/// material and its evidence the fit's. Where the cantilevers do not solve with the law the
+/// strips fitted (a law no cantilever holds), the bending stays as it was, the bends are
+/// reported unsolved (their drape angles not a number, so the verdict counts them over any
+/// limit) and a warning says why: the fit ends with its material and an honest verdict.
 pub(super) fn bend_stage(f: &mut Fitter, level: (usize, usize)) -> Result<(), FitError> {
     let t0 = Instant::now();
     let data = f.ctx.data;
     let (ctx, lab, stats, m) = (&f.ctx, &mut f.lab, &mut f.stats, &f.fitted);
-    let fit = if ctx.own_bending {
-        bending::bending_stage(ctx, lab, stats, m, level)?
+    let run = if ctx.own_bending {
+        bending::bending_stage(ctx, lab, stats, m, level)
     } else if !data.bend.is_empty() && data.known.thickness.is_none() {
-        thickness::thickness_stage(ctx, lab, stats, m, level)?
+        thickness::thickness_stage(ctx, lab, stats, m, level)
     } else {
         return Ok(());
     };
+    let fit = match run {
+        Ok(fit) => fit,
+        Err(e) if e.is_solve_failure() => {
+            unsolved_bends(f, &e);
+            let stage = if f.ctx.own_bending {
+                "bending"
+            } else {
+                "thickness"
+            };
+            f.stats.time_stage(stage, t0);
+            return Ok(());
+        }
+        Err(e) => return Err(e),
+    };
+    f.journal.drop_notes(UNSOLVED_BENDS);
     f.evidence.linearised.extend(fit.linearised);
     f.evidence.stage_errors = fit.errors;
     f.evidence.bend_angles = fit.angles;
@@ -292,6 +310,27 @@ pub(super) fn bend_stage(f: &mut Fitter, level: (usize, usize)) -> Result<(), Fi
     f.journal.say(&fit.line);
     f.stats.time_stage(fit.stage, t0);
     Ok(())
+}
+
+/// How the warning about bends left unsolved begins (one such note at most, and none once a
+/// later bend stage solves).
+const UNSOLVED_BENDS: &str = "warning: the bends are not fitted";
+
+/// The bends left unsolved by a bend stage that failed with `e`: their drape angles not a
+/// number, the bend stage's evidence dropped (the mesh check then leaves the bends out), a
+/// warning.
+fn unsolved_bends(f: &mut Fitter, e: &FitError) {
+    f.evidence.bend_angles = vec![f64::NAN; f.ctx.data.bend.len()];
+    f.evidence.stage_errors.clear();
+    f.evidence
+        .linearised
+        .retain(|l| !matches!(l.probe, super::mesh_check::Probe::Bends));
+    let note = format!(
+        "{UNSOLVED_BENDS} ({e}): the cantilevers do not solve with the law the strips fitted; the bending and thickness stay as they were and the bends are reported unsolved"
+    );
+    f.journal.say(&note);
+    f.journal.drop_notes(UNSOLVED_BENDS);
+    f.journal.note(note);
 }
 
 /// The final standard errors and the mesh check; a check that fails refines the strips of the
@@ -345,4 +384,39 @@ fn closing_notes(f: &mut Fitter) {
         ));
     }
     f.stats.time_stage("report", t0);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FitError;
+    use crate::scene::SceneError;
+    use crate::solve::SolveError;
+
+    #[test]
+    fn only_an_equilibrium_that_did_not_solve_is_a_solve_failure() {
+        let solve = || SceneError::Solve {
+            stage: "load factor 0.5900".into(),
+            source: SolveError::NotConverged {
+                iterations: 30,
+                residual: 0.1,
+                factorizations: 30,
+            },
+        };
+        let scene = |source| FitError::Scene {
+            stage: "bending stage on 16×24".into(),
+            source,
+        };
+        assert!(scene(solve()).is_solve_failure());
+        let stage = FitError::Stage {
+            stage: "bias stage".into(),
+            source: solve(),
+            hint: String::new(),
+        };
+        assert!(stage.is_solve_failure());
+        // a limit or bad input is not one: the fit must stop and say so
+        assert!(
+            !scene(SceneError::Input("mesh 9000x9000: too many faces".into())).is_solve_failure()
+        );
+        assert!(!FitError::Data("no fitted tensile test".into()).is_solve_failure());
+    }
 }

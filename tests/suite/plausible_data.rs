@@ -1,6 +1,7 @@
 //! `ks-fit fit` on plausible fabrics unlike the bundled five: a newcomer's first dataset of
 //! simple stiffening curves, a law fixed at a degree whose stress falls past the tests, and a
-//! soft-shear fabric whose bias strips carry less than half a newton.
+//! soft-shear fabric whose bias strips carry less than half a newton, and bends that no
+//! cantilever of the fitted law can hold.
 
 use crate::common::{folder, ks_fit, s};
 use std::path::{Path, PathBuf};
@@ -164,4 +165,72 @@ fn soft_shear_bias_strips_are_warned_about_not_refused() {
     let (rc, out, _) = ks_fit(&["check", s(&alone.join("fabric.toml"))]);
     assert_eq!(rc, 0, "{out}");
     assert!(out.contains("would refuse"), "{out}");
+}
+
+/// Warp and weft strips (linear, 20 and 15 N/mm on 50 × 75 mm) and two D1388 bends of a fabric
+/// whose shear is given in `[known]` as 1 Pa, the least the engine takes: with the paper's
+/// bending (`--bending paper`, rigidities from the membrane law) no cantilever of that law
+/// solves. The fit ends with its material and says so: exit 3, the bends unsolved (`nan` in
+/// the material file, which reads back), a warning that names the failed solve.
+#[test]
+fn bends_no_cantilever_of_the_law_can_hold_end_with_a_material_and_a_failed_verdict() {
+    let dir = folder("limp-shear");
+    for (name, k) in [("warp.csv", 20.0), ("weft.csv", 15.0)] {
+        let rows: String = (1..=10)
+            .map(|i| format!("{:.3},{:.4}\n", 0.3 * i as f64, k * 0.3 * i as f64))
+            .collect();
+        std::fs::write(dir.join(name), format!("elongation_mm,force_n\n{rows}")).unwrap();
+    }
+    let mut toml = String::from(
+        "name = \"limp-shear\"\nareal_density_g_m2 = 150.0\nthickness_mm = 0.3\n\n[known]\ng12_pa = 1.0\n",
+    );
+    for (angle, curve) in [(90, "warp.csv"), (0, "weft.csv")] {
+        toml.push_str(&format!(
+            "\n[[tensile]]\nangle_deg = {angle}.0\nwidth_mm = 50.0\ngauge_length_mm = 75.0\ncurve = \"{curve}\"\n"
+        ));
+    }
+    for angle in [90, 0] {
+        toml.push_str(&format!(
+            "\n[[bend]]\nangle_deg = {angle}.0\nwidth_mm = 25.0\noverhang_mm = 60.0\ndrape_angle_deg = 41.5\n"
+        ));
+    }
+    let fabric = dir.join("fabric.toml");
+    std::fs::write(&fabric, toml).unwrap();
+    let fitted = dir.join("fitted.toml");
+    let (rc, out, err) = ks_fit(&[
+        "fit",
+        s(&fabric),
+        "-o",
+        s(&fitted),
+        "--bending",
+        "paper",
+        "--mesh-ladder",
+        "4x6",
+        "--mesh-check",
+        "off",
+        "--test-meshes",
+        "ladder",
+    ]);
+    assert_eq!(rc, 3, "{out}{err}");
+    assert!(
+        out.contains("warning: the bends are not fitted (thickness stage")
+            && out.contains("equilibrium solve failed"),
+        "{out}"
+    );
+    assert!(
+        out.contains("FIT FAILED") && out.contains("bend 90°"),
+        "{out}"
+    );
+    let m = kshell::material::load_material(&fitted).unwrap_or_else(|e| panic!("{e}"));
+    assert!(m.thickness.is_finite() && m.law.a11.is_finite());
+    let text = std::fs::read_to_string(&fitted).unwrap();
+    assert!(text.contains("drape_angle_deg = nan"), "{text}");
+    let doc: toml::Table = text.parse().unwrap();
+    let bends = doc["fit"]["test"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|t| t["kind"].as_str() == Some("bend"))
+        .count();
+    assert_eq!(bends, 2);
 }

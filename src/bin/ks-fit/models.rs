@@ -176,13 +176,7 @@ fn tri_fit_toml(name: &str, file: &Path, kind: TriKind, r: &TriFit) -> String {
     let _ = writeln!(text, "undetermined = {:?}", r.undetermined);
     let _ = writeln!(text, "notes = {:?}", r.notes);
     // a test that did not solve with the fitted parameters is `nan` (TOML's spelling)
-    let num = |v: f64, digits: usize| {
-        if v.is_finite() {
-            format!("{v:.digits$}")
-        } else {
-            "nan".to_string()
-        }
-    };
+    let num = kshell::io::toml_float;
     for t in &r.tests {
         let _ = writeln!(text, "\n[[fit.test]]\nkind = {:?}", t.kind);
         if t.angle_deg.is_finite() {
@@ -299,13 +293,7 @@ fn tri_verdict(r: &TriFit, max_error: f64) -> bool {
 /// The keys of one shape's `[[fit.test]]` entry after `kind` and `obj` (`nan` where the scene
 /// did not solve).
 pub fn shape_keys(s: &kshell::fit::shape_target::ShapeFit) -> String {
-    let num = |v: f64, digits: usize| {
-        if v.is_finite() {
-            format!("{v:.digits$}")
-        } else {
-            "nan".to_string()
-        }
-    };
+    let num = kshell::io::toml_float;
     let mut text = format!(
         "scene = {:?}\ndescriptor = {:?}\nrms_distance_mm = {}\nshape_error = {}\n",
         s.scene,

@@ -4,6 +4,7 @@
 use super::{toml_key, toml_str};
 use crate::fit::verdict::Judgement;
 use crate::fit::{FitResult, TestOutcome};
+use crate::io::toml_float;
 use crate::material::material_toml;
 use std::fmt::Write;
 
@@ -203,7 +204,7 @@ fn test_table(s: &mut String, t: &TestOutcome, judgement: &Judgement) {
         let _ = writeln!(s, "repeat = {k}");
     }
     if let Some(e) = t.avg_rel_error {
-        let _ = writeln!(s, "avg_rel_error = {e:.6}");
+        let _ = writeln!(s, "avg_rel_error = {}", toml_float(e, 6));
     }
     let excluded = t.points.iter().filter(|p| !p.2.is_finite()).count();
     if excluded > 0 {
@@ -211,38 +212,38 @@ fn test_table(s: &mut String, t: &TestOutcome, judgement: &Judgement) {
         let _ = writeln!(s, "excluded_points = {excluded}");
     }
     if let Some(e) = t.avg_rel_error_aligned {
-        let _ = writeln!(s, "avg_rel_error_aligned = {e:.6}");
+        let _ = writeln!(s, "avg_rel_error_aligned = {}", toml_float(e, 6));
     }
     if let Some(k) = t.repeat_scale {
-        let _ = writeln!(s, "repeat_scale = {k:.6}");
+        let _ = writeln!(s, "repeat_scale = {}", toml_float(k, 6));
     }
     if let Some(e) = t.avg_rel_error_scaled {
-        let _ = writeln!(s, "avg_rel_error_scaled = {e:.6}");
+        let _ = writeln!(s, "avg_rel_error_scaled = {}", toml_float(e, 6));
     }
     if let Some(toe) = t.toe {
-        let _ = writeln!(s, "toe_mm = {:.4}", toe * 1e3);
+        let _ = writeln!(s, "toe_mm = {}", toml_float(toe * 1e3, 4));
     }
     if let Some((nx, ny)) = t.mesh {
         let _ = writeln!(s, "mesh = \"{nx}x{ny}\"");
     }
     if let Some(m) = t.mesh_error_est {
-        let _ = writeln!(s, "mesh_error_est = {m:.6}");
+        let _ = writeln!(s, "mesh_error_est = {}", toml_float(m, 6));
     }
     if !t.points.is_empty() {
         let _ = writeln!(s, "points = {}", t.points.len());
     }
     if let Some(a) = t.drape_angle_deg {
-        let _ = writeln!(s, "drape_angle_deg = {a:.4}");
+        let _ = writeln!(s, "drape_angle_deg = {}", toml_float(a, 4));
     }
     if let Some(a) = t.target_drape_deg {
-        let _ = writeln!(s, "target_drape_angle_deg = {a:.4}");
+        let _ = writeln!(s, "target_drape_angle_deg = {}", toml_float(a, 4));
     }
     if let Some(m) = t.misalign_deg {
-        let _ = writeln!(s, "misalign_deg = {m:.3}");
+        let _ = writeln!(s, "misalign_deg = {}", toml_float(m, 3));
     }
     let _ = writeln!(s, "used_in_fit = {}", t.used_in_fit);
     if let Some(e) = judgement.error {
-        let _ = writeln!(s, "judged_error = {e:.6}");
+        let _ = writeln!(s, "judged_error = {}", toml_float(e, 6));
     }
     let _ = writeln!(s, "verdict = {}", toml_str(judgement.mark));
 }
