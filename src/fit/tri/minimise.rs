@@ -297,9 +297,12 @@ pub(super) fn scan(
         .filter(|&j| j != 0)
         .map(|j| 2f64.powf(j as f64 / 2.0))
         .collect();
-    let trials: Vec<f64> = {
+    // in rounds of one trial a thread, each said, so that a scan whose trials solve slowly
+    // is not silent for all sixteen
+    let mut trials: Vec<f64> = Vec::with_capacity(factors.len());
+    for round in factors.chunks(rayon::current_num_threads().max(1)) {
         let m = &*m;
-        factors
+        let rms: Vec<f64> = round
             .par_iter()
             .map(|&f| {
                 let mut t = m.clone();
@@ -311,8 +314,14 @@ pub(super) fn scan(
                 }
                 cost(&t, set, targets, &mut 0).0
             })
-            .collect()
-    };
+            .collect();
+        trials.extend(rms);
+        say(&format!(
+            "scan: {} of {} factors tried",
+            trials.len(),
+            factors.len()
+        ));
+    }
     *evaluations += factors.len();
     for (&f, &rms) in factors.iter().zip(&trials) {
         if rms < best.0 || (rms.is_finite() && !best.0.is_finite()) {
