@@ -39,4 +39,5 @@ mod strategies;
 mod tri_fit;
 mod tri_models;
 mod tri_scenes;
+mod tri_strips;
 mod zoo;

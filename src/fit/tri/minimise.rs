@@ -2,7 +2,7 @@
 //! Gauss–Newton on log stiffness with forward-difference Jacobians, spline refinement, and a
 //! coarse scan for misfits that jump (buckled shapes).
 
-use super::{tie_diagonal, Target, TriFitOptions};
+use super::{tie_diagonal, Target};
 use crate::tri::curve::Stiffness;
 use crate::tri::{TriKind, TriMaterial};
 
@@ -27,23 +27,23 @@ pub(super) fn cost(
     )
 }
 
-/// Fits component `c` on the targets `set`: linear first, then (when `splines`) with 2, 3
-/// and 5 control values over the strains the set reaches while each lowers the rms by ≥ 1 %.
-/// Returns the final rms.
+/// Fits component `c` on the targets `set`: linear first, then (with `controls`, the most
+/// control values) with 2, 3 and 5 control values over the strains the set reaches while each
+/// lowers the rms by ≥ 1 %. Says each iteration through `say`. Returns the final rms.
 pub(super) fn stage(
     m: &mut TriMaterial,
     c: usize,
     set: &[usize],
     targets: &[Target],
     evaluations: &mut usize,
-    opts: &TriFitOptions,
-    splines: bool,
+    controls: Option<usize>,
+    say: &mut dyn FnMut(&str),
 ) -> f64 {
-    let mut best = levenberg_marquardt(m, &[c], set, targets, evaluations);
+    let mut best = levenberg_marquardt(m, &[c], set, targets, evaluations, say);
     // a fit within 0.01 % has nothing left for control points to explain
-    if !splines || best < 1e-4 {
+    let Some(max_controls) = controls.filter(|_| best >= 1e-4) else {
         return best;
-    }
+    };
     let reach = set
         .iter()
         .filter_map(|&i| match &targets[i] {
@@ -56,13 +56,14 @@ pub(super) fn stage(
     if reach <= 0.0 {
         return best;
     }
-    for n in [2, 3, 5].into_iter().filter(|&n| n <= opts.max_controls) {
+    for n in [2, 3, 5].into_iter().filter(|&n| n <= max_controls) {
         let old = m.curves[c].clone();
         let Some(finer) = refined(&old, reach, n) else {
             break;
         };
         m.curves[c] = finer;
-        let cost = levenberg_marquardt(m, &[c], set, targets, evaluations);
+        let mut tagged = |line: &str| say(&format!("{n} control values, {line}"));
+        let cost = levenberg_marquardt(m, &[c], set, targets, evaluations, &mut tagged);
         if cost < 0.99 * best {
             best = cost;
         } else {
@@ -127,80 +128,150 @@ pub(super) fn scale_value(m: &mut TriMaterial, comps: &[usize], mut j: usize, f:
     }
 }
 
+/// Most Gauss–Newton iterations of one [`levenberg_marquardt`] run.
+const LM_ITERATIONS: usize = 20;
+
+/// Most damped trials of one Gauss–Newton iteration before it gives up.
+const LM_TRIALS: usize = 10;
+
+/// Largest move of a log control value in one trial: a factor e^0.7 ≈ 2.
+const LM_MAX_STEP: f64 = 0.7;
+
+/// Relative drop of the rms below which an accepted step ends the run.
+const LM_GAIN: f64 = 1e-4;
+
 /// Damped Gauss–Newton on log k of the control values of the components `comps`, each trial
 /// moving a value by at most a factor e^0.7 ≈ 2 (a much softer cantilever than the last takes
 /// long to solve, and the tied warp and weft bending are nearly collinear where the diagonal
-/// hinges carry the bend, which makes undamped steps long).
+/// hinges carry the bend, which makes undamped steps long). Says each iteration's rms error
+/// through `say`.
 pub(super) fn levenberg_marquardt(
     m: &mut TriMaterial,
     comps: &[usize],
     set: &[usize],
     targets: &[Target],
     evaluations: &mut usize,
+    say: &mut dyn FnMut(&str),
 ) -> f64 {
+    let lm = Lm {
+        comps,
+        set,
+        targets,
+    };
     let (mut rms, mut r) = cost(m, set, targets, evaluations);
     // a start at which a test does not solve has no Jacobian: the scale of the stage's
     // component at which every test solves and fits best is the start instead
     if !rms.is_finite() && comps.len() == 1 {
-        scan(m, comps[0], set, targets, evaluations);
+        scan(m, comps[0], set, targets, evaluations, say);
         (rms, r) = cost(m, set, targets, evaluations);
     }
     let mut lambda = 1e-3;
-    for _ in 0..20 {
-        let n: usize = comps.iter().map(|&c| m.curves[c].k.len()).sum();
-        let h: f64 = 1e-4;
-        // the Jacobian's columns are independent runs: solved side by side (a stage of one
-        // test, like a shape or a cantilever, has no other parallelism), collected in order
-        let jac: Vec<Vec<f64>> = {
-            use rayon::prelude::*;
-            let m = &*m;
-            (0..n)
-                .into_par_iter()
-                .map(|j| {
-                    let mut t = m.clone();
-                    scale_value(&mut t, comps, j, h.exp());
-                    let (_, rt) = cost(&t, set, targets, &mut 0);
-                    rt.iter().zip(&r).map(|(x, y)| (x - y) / h).collect()
-                })
-                .collect()
-        };
-        *evaluations += n;
-        let mut improved = false;
-        if jac.iter().flatten().any(|v| !v.is_finite()) {
+    for it in 1..=LM_ITERATIONS {
+        let Some(jac) = lm.jacobian(m, &r, evaluations) else {
             break;
-        }
-        for _ in 0..10 {
-            let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
-            let mut b = nalgebra::DVector::<f64>::zeros(n);
-            for p in 0..n {
-                b[p] = -jac[p].iter().zip(&r).map(|(x, y)| x * y).sum::<f64>();
-                for q in 0..n {
-                    a[(p, q)] = jac[p].iter().zip(&jac[q]).map(|(x, y)| x * y).sum::<f64>();
-                }
-                a[(p, p)] *= 1.0 + lambda;
-                a[(p, p)] += 1e-12;
-            }
-            let Some(step) = a.lu().solve(&b) else { break };
-            let mut t = m.clone();
-            for j in 0..n {
-                scale_value(&mut t, comps, j, step[j].clamp(-0.7, 0.7).exp());
-            }
-            let (trms, tr) = cost(&t, set, targets, evaluations);
-            if trms < rms {
-                let gain = (rms - trms) / rms;
-                *m = t;
-                (rms, r) = (trms, tr);
-                lambda = (lambda / 4.0).max(1e-9);
-                improved = gain > 1e-4;
-                break;
-            }
-            lambda *= 4.0;
-        }
+        };
+        let mut tell = |line: &str| say(&format!("iteration {it}: {line}"));
+        let state = (&mut rms, &mut r);
+        let improved = lm.damped_step(m, &jac, state, &mut lambda, evaluations, &mut tell);
+        say(&format!(
+            "iteration {it}: rms error {:.2} % over {} test(s), {} evaluation(s) so far",
+            100.0 * rms,
+            set.len(),
+            evaluations
+        ));
         if !improved {
             break;
         }
     }
     rms
+}
+
+/// One Gauss–Newton problem: the control values of `comps` fitted to the targets `set`.
+struct Lm<'a> {
+    comps: &'a [usize],
+    set: &'a [usize],
+    targets: &'a [Target],
+}
+
+impl Lm<'_> {
+    /// The forward-difference Jacobian of the residuals `r` at `m` in log k, one column per
+    /// control value (`None` where a column is not finite).
+    fn jacobian(
+        &self,
+        m: &TriMaterial,
+        r: &[f64],
+        evaluations: &mut usize,
+    ) -> Option<Vec<Vec<f64>>> {
+        let n: usize = self.comps.iter().map(|&c| m.curves[c].k.len()).sum();
+        let h: f64 = 1e-4;
+        // the Jacobian's columns are independent runs: solved side by side (a stage of one
+        // test, like a shape or a cantilever, has no other parallelism), collected in order
+        let jac: Vec<Vec<f64>> = {
+            use rayon::prelude::*;
+            (0..n)
+                .into_par_iter()
+                .map(|j| {
+                    let mut t = m.clone();
+                    scale_value(&mut t, self.comps, j, h.exp());
+                    let (_, rt) = cost(&t, self.set, self.targets, &mut 0);
+                    rt.iter().zip(r).map(|(x, y)| (x - y) / h).collect()
+                })
+                .collect()
+        };
+        *evaluations += n;
+        (!jac.iter().flatten().any(|v| !v.is_finite())).then_some(jac)
+    }
+
+    /// Trials of the damped step from `m` (rms error and residuals `state`), raising the
+    /// damping `lambda` fourfold after each rejected one (said through `say`); the first that
+    /// lowers the rms is taken into `m` and `state`. Whether it lowered the rms by more than
+    /// [`LM_GAIN`].
+    fn damped_step(
+        &self,
+        m: &mut TriMaterial,
+        jac: &[Vec<f64>],
+        (rms, r): (&mut f64, &mut Vec<f64>),
+        lambda: &mut f64,
+        evaluations: &mut usize,
+        say: &mut dyn FnMut(&str),
+    ) -> bool {
+        let n = jac.len();
+        for trial in 1..=LM_TRIALS {
+            let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+            let mut b = nalgebra::DVector::<f64>::zeros(n);
+            for p in 0..n {
+                b[p] = -jac[p].iter().zip(r.iter()).map(|(x, y)| x * y).sum::<f64>();
+                for q in 0..n {
+                    a[(p, q)] = jac[p].iter().zip(&jac[q]).map(|(x, y)| x * y).sum::<f64>();
+                }
+                a[(p, p)] *= 1.0 + *lambda;
+                a[(p, p)] += 1e-12;
+            }
+            let Some(step) = a.lu().solve(&b) else {
+                return false;
+            };
+            let mut t = m.clone();
+            for j in 0..n {
+                let d = step[j].clamp(-LM_MAX_STEP, LM_MAX_STEP);
+                scale_value(&mut t, self.comps, j, d.exp());
+            }
+            let (trms, tr) = cost(&t, self.set, self.targets, evaluations);
+            if trms < *rms {
+                let gain = (*rms - trms) / *rms;
+                *m = t;
+                (*rms, *r) = (trms, tr);
+                *lambda = (*lambda / 4.0).max(1e-9);
+                return gain > LM_GAIN;
+            }
+            *lambda *= 4.0;
+            say(&format!(
+                "trial {trial} rejected (rms error {:.2} % against {:.2} %), damping raised",
+                100.0 * trms,
+                100.0 * *rms
+            ));
+        }
+        false
+    }
 }
 
 /// Scales component `c` (all its control values) by the factor of 2^(j/2), j = −8…8, that
@@ -217,6 +288,7 @@ pub(super) fn scan(
     set: &[usize],
     targets: &[Target],
     evaluations: &mut usize,
+    say: &mut dyn FnMut(&str),
 ) {
     use rayon::prelude::*;
     let mut best = (cost(m, set, targets, evaluations).0, 1.0);
@@ -225,9 +297,12 @@ pub(super) fn scan(
         .filter(|&j| j != 0)
         .map(|j| 2f64.powf(j as f64 / 2.0))
         .collect();
-    let trials: Vec<f64> = {
+    // in rounds of one trial a thread, each said, so that a scan whose trials solve slowly
+    // is not silent for all sixteen
+    let mut trials: Vec<f64> = Vec::with_capacity(factors.len());
+    for round in factors.chunks(rayon::current_num_threads().max(1)) {
         let m = &*m;
-        factors
+        let rms: Vec<f64> = round
             .par_iter()
             .map(|&f| {
                 let mut t = m.clone();
@@ -239,8 +314,14 @@ pub(super) fn scan(
                 }
                 cost(&t, set, targets, &mut 0).0
             })
-            .collect()
-    };
+            .collect();
+        trials.extend(rms);
+        say(&format!(
+            "scan: {} of {} factors tried",
+            trials.len(),
+            factors.len()
+        ));
+    }
     *evaluations += factors.len();
     for (&f, &rms) in factors.iter().zip(&trials) {
         if rms < best.0 || (rms.is_finite() && !best.0.is_finite()) {
@@ -253,6 +334,12 @@ pub(super) fn scan(
     if (c == 3 || c == 4) && m.kind != TriKind::Springs {
         tie_diagonal(m);
     }
+    say(&format!(
+        "scan: scaled by {:.3}, rms error {:.2} % over {} test(s)",
+        best.1,
+        100.0 * best.0,
+        set.len()
+    ));
 }
 
 #[cfg(test)]
@@ -307,7 +394,7 @@ mod tests {
         bend.mesh = (8, 20);
         let targets = [Target::Bend { bend, angle: 41.5 }];
         assert!(cost(&m, &[0], &targets, &mut 0).0.is_nan());
-        let rms = levenberg_marquardt(&mut m, &[3], &[0], &targets, &mut 0);
+        let rms = levenberg_marquardt(&mut m, &[3], &[0], &targets, &mut 0, &mut |_| {});
         assert!(rms < 0.01, "rms {rms}, bend_warp {:?}", m.curves[3].k);
         assert!(m.curves[3].k[0] > 1079.97, "{:?}", m.curves[3].k);
     }

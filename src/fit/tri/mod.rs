@@ -241,6 +241,14 @@ pub fn fit_tri(
     })
 }
 
+/// Newton iterations a fitted strip may spend per elongation it is fitted at, over all its
+/// elongations together: half of what one failed step and its four sub-steps may take at
+/// the strip solver's 60 a solve. A trial stiffness at which the strip crawls through wrinkle
+/// patterns fails within it, as a failed trial. On the bundled cotton's off-axis strips the
+/// trials that solve take 80–190 Newton iterations over their five elongations; 60 a point
+/// failed some of them and changed the shear fit.
+pub const TRIAL_ITERATIONS: usize = 150;
+
 /// The fit's targets: the tensile curves (thinned to `opts.points`; the springs model's on
 /// yarn-aligned strips only), the cantilevers and the captured shapes.
 fn tri_targets(data: &FabricDataset, opts: &TriFitOptions) -> Result<Vec<Target>, String> {
@@ -257,6 +265,7 @@ fn tri_targets(data: &FabricDataset, opts: &TriFitOptions) -> Result<Vec<Target>
         let n = t.elongation.len();
         let take = opts.points.min(n.saturating_sub(1)).max(1);
         let idx: Vec<usize> = (1..=take).map(|k| (k * (n - 1)).div_ceil(take)).collect();
+        strip.budget = Some(TRIAL_ITERATIONS * take);
         targets.push(Target::Strip {
             strip,
             elongation: idx.iter().map(|&i| t.elongation[i]).collect(),

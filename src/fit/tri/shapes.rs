@@ -41,10 +41,12 @@ pub(super) fn shape_stage(
         return false;
     }
     let names: Vec<&str> = comps.iter().map(|&c| COMPONENTS[c]).collect();
+    let label = names.join(", ");
+    let mut say = |line: &str| progress(&format!("{label} from shapes: {line}"));
     for &c in &comps {
-        scan(m, c, &set, targets, evaluations);
+        scan(m, c, &set, targets, evaluations, &mut say);
     }
-    let cost = levenberg_marquardt(m, &comps, &set, targets, evaluations);
+    let cost = levenberg_marquardt(m, &comps, &set, targets, evaluations, &mut say);
     progress(&format!(
         "{} from {} shape(s): rms error {:.2} %",
         names.join(", "),

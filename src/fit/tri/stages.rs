@@ -108,14 +108,15 @@ impl TriRun<'_> {
         progress: &mut dyn FnMut(&str),
     ) {
         if !set.is_empty() {
+            let mut say = |line: &str| progress(&format!("{name}: {line}"));
             let cost = stage(
                 material,
                 c,
                 set,
                 self.targets,
                 &mut self.evaluations,
-                self.opts,
-                splines,
+                splines.then_some(self.opts.max_controls),
+                &mut say,
             );
             progress(&format!(
                 "{name}: {} control value(s), rms error {:.2} % over {} test(s)",
@@ -196,12 +197,14 @@ impl TriRun<'_> {
             .copied()
             .collect();
         let before = material.clone();
+        let mut say = |line: &str| progress(&format!("warp and weft bending together: {line}"));
         let cost = levenberg_marquardt(
             material,
             &[3, 4],
             &both,
             self.targets,
             &mut self.evaluations,
+            &mut say,
         );
         progress(&format!(
             "warp and weft bending together: rms error {:.2} % over {} test(s)",
