@@ -12,17 +12,6 @@ use crate::material::{BendingRigidity, Orthotropic};
 use crate::scene::{BendRig, CantileverBend, SceneError};
 use rayon::prelude::*;
 
-/// A cantilever mesh at a ladder level: at 8 × 12, 4 across and elements along of an eighth
-/// of the width but at least 3.125 mm; both doubled per level. Elements twice as long (as the
-/// tensile mesh) leave 0.5–1° of drape angle on the first level, 2–4 % of bending rigidity
-/// (a 62.65 mm overhang drapes 41.50° on 4 × 10, 42.430° on 4 × 20 and on 8 × 20, 42.460°
-/// on 4 × 40), and the mesh ladder's skip test looks at the strips only.
-///
-/// The along size is not tied to the width below 25 mm: how finely a cantilever must be cut
-/// along depends on how it curves (its overhang against its bending length), not on how wide it
-/// is. On a 2.5 × 75 mm strip draping 62.41° (`ks-fit bend --width 2.5 --overhang 75`,
-/// a11 = 3e7 Pa, τ = 0.2 mm, 100 g/m²): 4 × 12 is 0.57° off 8 × 240, 4 × 24 0.016°, where
-/// square elements need 4 × 120 and 8 × 240 (1.1 s and 4.3 s against 0.09 s and 0.19 s).
 /// A cantilever's cache key: the test's width, overhang and angle, and its mesh.
 pub(super) type BendKey = ([u64; 3], (usize, usize));
 
@@ -37,6 +26,17 @@ fn bend_key(b: &BendTest, mesh: (usize, usize)) -> BendKey {
     )
 }
 
+/// A cantilever mesh at a ladder level: at 8 × 12, 4 across and elements along of an eighth
+/// of the width but at least 3.125 mm; both doubled per level. Elements twice as long (as the
+/// tensile mesh) leave 0.5–1° of drape angle on the first level, 2–4 % of bending rigidity
+/// (a 62.65 mm overhang drapes 41.50° on 4 × 10, 42.430° on 4 × 20 and on 8 × 20, 42.460°
+/// on 4 × 40), and the mesh ladder's skip test looks at the strips only.
+///
+/// The along size is not tied to the width below 25 mm: how finely a cantilever must be cut
+/// along depends on how it curves (its overhang against its bending length), not on how wide it
+/// is. On a 2.5 × 75 mm strip draping 62.41° (`ks-fit bend --width 2.5 --overhang 75`,
+/// a11 = 3e7 Pa, τ = 0.2 mm, 100 g/m²): 4 × 12 is 0.57° off 8 × 240, 4 × 24 0.016°, where
+/// square elements need 4 × 120 and 8 × 240 (1.1 s and 4.3 s against 0.09 s and 0.19 s).
 pub(super) fn bend_mesh(level: (usize, usize), bend: &BendTest) -> (usize, usize) {
     let f = level.0 as f64 / 8.0;
     let nx = ((4.0 * f).round() as usize).max(2);
