@@ -339,3 +339,14 @@ fn eta(mu: &[f64], alpha: &[f64]) -> Eta {
         alpha: alpha.to_vec(),
     }
 }
+
+/// `ks-fit fit` flags of a quick fit: the 4 × 6 mesh alone, no mesh check, every test on the
+/// ladder's mesh (a test about what the fit does, not how accurate its mesh is).
+pub const QUICK_FIT: [&str; 6] = [
+    "--mesh-ladder",
+    "4x6",
+    "--mesh-check",
+    "off",
+    "--test-meshes",
+    "ladder",
+];

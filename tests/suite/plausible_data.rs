@@ -3,7 +3,7 @@
 //! soft-shear fabric whose bias strips carry less than half a newton, and bends that no
 //! cantilever of the fitted law can hold.
 
-use crate::common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s, QUICK_FIT};
 use std::path::{Path, PathBuf};
 
 /// A newcomer's dataset: warp, weft and bias curves of 12 points each, F = k·e·(1 + c·e)
@@ -197,20 +197,9 @@ fn bends_no_cantilever_of_the_law_can_hold_end_with_a_material_and_a_failed_verd
     let fabric = dir.join("fabric.toml");
     std::fs::write(&fabric, toml).unwrap();
     let fitted = dir.join("fitted.toml");
-    let (rc, out, err) = ks_fit(&[
-        "fit",
-        s(&fabric),
-        "-o",
-        s(&fitted),
-        "--bending",
-        "paper",
-        "--mesh-ladder",
-        "4x6",
-        "--mesh-check",
-        "off",
-        "--test-meshes",
-        "ladder",
-    ]);
+    let mut args = vec!["fit", s(&fabric), "-o", s(&fitted), "--bending", "paper"];
+    args.extend(QUICK_FIT);
+    let (rc, out, err) = ks_fit(&args);
     assert_eq!(rc, 3, "{out}{err}");
     assert!(
         out.contains("warning: the bends are not fitted (thickness stage")

@@ -3,7 +3,7 @@
 //! (The law fabrics need the virtual lab to write them, minutes each; `paper_repro/zoo/run.sh`
 //! writes and fits them.)
 
-use crate::common::{folder, ks_fit, s};
+use crate::common::{folder, ks_fit, s, QUICK_FIT};
 use kshell::synth::zoo::{build, draw};
 
 /// The zoo's seed in `paper_repro/zoo/run.sh`.
@@ -50,21 +50,9 @@ fn two_analytic_fabrics_fit_to_a_material_with_finite_numbers() {
     for &(_, index) in &picks[..2] {
         let path = write(&dir, index);
         let out = dir.join(format!("m{index}.toml"));
-        let (rc, stdout, err) = ks_fit(&[
-            "fit",
-            &path,
-            "-o",
-            s(&out),
-            "--max-degree",
-            "1",
-            "--mesh-ladder",
-            "4x6",
-            "--mesh-check",
-            "off",
-            "--test-meshes",
-            "ladder",
-            "--quiet",
-        ]);
+        let mut args = vec!["fit", &path, "-o", s(&out), "--max-degree", "1", "--quiet"];
+        args.extend(QUICK_FIT);
+        let (rc, stdout, err) = ks_fit(&args);
         assert!(rc == 0 || rc == 3, "{path}: exit {rc}\n{stdout}{err}");
         let text = std::fs::read_to_string(&out).unwrap();
         // no value (comments aside) is NaN or infinite
