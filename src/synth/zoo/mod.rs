@@ -15,7 +15,7 @@
 mod build;
 pub mod curves;
 
-pub use build::{build, ZooDataset};
+pub use build::{build, LabMesh, ZooDataset, STRIP_TOL};
 
 use super::Rng;
 use crate::material::{BendingRigidity, Eta, FabricMaterial, Orthotropic, OrthotropicStvk};

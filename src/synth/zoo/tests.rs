@@ -161,3 +161,32 @@ fn no_strip_is_pulled_past_the_tension_that_breaks_it() {
     }
     assert!(stiffening > 20, "{stiffening} law fabrics stiffen twofold");
 }
+
+/// A law fabric's strips are solved on the coarsest mesh of the lab's ladder whose estimated
+/// end-force error meets the tolerance, and `lab.csv` says which: a warp strip (its force
+/// barely depends on the mesh) keeps the ladder's first level.
+#[test]
+fn a_law_strip_is_solved_on_a_mesh_that_meets_the_lab_tolerance() {
+    let mut f = draw(58, 0);
+    let Source::Law(m) = &mut f.source else {
+        panic!("even draws are law fabrics")
+    };
+    for eta in [&mut m.law.warp, &mut m.law.weft, &mut m.law.shear] {
+        *eta = crate::material::Eta::linear();
+    }
+    f.protocol = f.protocol.clean();
+    f.protocol.angles = vec![90.0];
+    f.protocol.strip = (0.025, 0.025);
+    f.protocol.points = 12;
+    f.protocol.bends = false;
+    let z = build(&f, &mut |_| {}).unwrap();
+    assert_eq!(z.lab_meshes.len(), 1);
+    let kept = &z.lab_meshes[0];
+    assert!(kept.converged(), "{kept:?}");
+    assert_eq!(kept.mesh, (12, 12), "{kept:?}");
+    let dir = std::env::temp_dir().join(format!("kshell-zoo-lab-{}", std::process::id()));
+    z.write(&dir, "lab mesh").unwrap();
+    let csv = std::fs::read_to_string(dir.join("lab.csv")).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(csv.starts_with("angle_deg,mesh,estimated_error\n90,12x12,"), "{csv}");
+}
