@@ -337,6 +337,7 @@ fn unbuilt(dir: &Path) -> String {
 /// The shell fits of law fabrics against their truth: |fitted/true − 1| per quantity.
 fn truth_table(dir: &Path, fits: &[Fit]) -> String {
     let mut errors: Vec<Vec<(f64, String)>> = vec![Vec::new(); QUANTITIES.len()];
+    let mut undetermined: Vec<Vec<String>> = vec![Vec::new(); QUANTITIES.len()];
     let mut unconverged = String::new();
     for f in fits.iter().filter(|f| f.model == "kl" && f.has_material) {
         // data off the law by more than the lab's tolerance have no truth to recover
@@ -356,14 +357,22 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
         let dataset = dataset.unwrap_or_default();
         let bends = dataset.contains("[[bend]]");
         let known = dataset.contains("[known]");
+        // and what the fit's own standard errors call determined ([fit.uncertainty])
+        let said = fit_determined(&dir.join("fits").join(&f.fabric).join("material.toml"));
         for (k, (a, b)) in quantities(&m).iter().zip(quantities(&t)).enumerate() {
-            let determined = match k {
-                0 | 1 => !known,
-                3 | 4 => bends,
-                _ => true,
+            let (determined, param) = match k {
+                0 => (!known, "a11_pa"),
+                1 => (!known, "a22_pa"),
+                2 => (true, "g12_pa"),
+                _ => (bends, ""),
             };
-            if determined {
+            if !determined {
+                continue;
+            }
+            if said(param) {
                 errors[k].push(((a / b - 1.0).abs(), f.fabric.clone()));
+            } else {
+                undetermined[k].push(f.fabric.clone());
             }
         }
     }
@@ -392,6 +401,15 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
             worst.1
         );
     }
+    for (name, fabrics) in QUANTITIES.iter().zip(&undetermined) {
+        if !fabrics.is_empty() {
+            let _ = writeln!(
+                s,
+                "\n{name}: left out where the fit reports it NOT DETERMINED by the data: {}",
+                fabrics.join(", ")
+            );
+        }
+    }
     if !unconverged.is_empty() {
         let _ = write!(
             s,
@@ -402,6 +420,25 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
         );
     }
     s
+}
+
+/// Whether the fitted material file's `[fit.uncertainty]` calls parameter `name` determined
+/// (`true` for a name it does not list, or an empty name).
+fn fit_determined(material: &Path) -> impl Fn(&str) -> bool {
+    let doc: Option<toml::Table> = std::fs::read_to_string(material)
+        .ok()
+        .and_then(|t| t.parse().ok());
+    move |name: &str| {
+        let entry = doc
+            .as_ref()
+            .and_then(|d| d.get("fit"))
+            .and_then(|f| f.get("uncertainty"))
+            .and_then(|u| u.get(name));
+        entry
+            .and_then(|e| e.get("determined"))
+            .and_then(|d| d.as_bool())
+            .unwrap_or(true)
+    }
 }
 
 /// Why a law fabric's curves are not the converged law's (`lab.csv`: an angle whose

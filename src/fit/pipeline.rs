@@ -63,7 +63,7 @@ pub fn fit(
     let t0 = Instant::now();
     let (mut bench, fitted) = f.bench();
     let tests = validation::outcomes(&mut bench, fitted, last)?;
-    let identifiability = validation::identifiability(&f.ctx, &f.fitted, &strips);
+    let identifiability = validation::identifiability(&f.ctx, &f.fitted, &strips, &uncertainty);
     if let Some(m) = &mesh_check {
         let (mut bench, fitted) = f.bench();
         bench.mesh_check_notes(fitted, last, m);

@@ -15,6 +15,7 @@ use super::journal::Journal;
 use super::map::A12Rule;
 use super::preprocess::Curve;
 use super::tolerances::INTERPOLATION_TOL;
+use super::uncertainty::ParamError;
 use super::{Bench, Context, FitError, Fitted, TestOutcome, Work};
 use crate::dataset::Role;
 use crate::scene::{CantileverBend, TensileStrip};
@@ -425,7 +426,15 @@ fn bend_outcomes(
 }
 
 /// Which quantities the data determined and which were assumed, with their values.
-pub(super) fn identifiability(ctx: &Context, m: &Fitted, strips: &[Vec<usize>]) -> Vec<String> {
+/// A quantity that strips were fitted to is still only "determined" where the fit's standard
+/// errors say its parameter is (`uncertainty`: a stiffness the curves barely depend on, such as
+/// the shear of wide off-axis strips whose yarns run from jaw to jaw, is not).
+pub(super) fn identifiability(
+    ctx: &Context,
+    m: &Fitted,
+    strips: &[Vec<usize>],
+    uncertainty: &[ParamError],
+) -> Vec<String> {
     let l = &m.law;
     let tau = m.thickness;
     let e1 = l.a11 - l.a12 * l.a12 / l.a22;
@@ -433,30 +442,36 @@ pub(super) fn identifiability(ctx: &Context, m: &Fitted, strips: &[Vec<usize>]) 
     let nu12 = l.a12 / l.a22;
     let g = 0.5 * l.g12;
     let mut out = Vec::new();
-    let source = |fitted: bool, known: bool| {
+    let source = |fitted: bool, known: bool, param: &str| {
+        let spread = uncertainty.iter().find(|e| e.name == param);
         if known {
-            "known"
-        } else if fitted {
-            "determined"
+            "known".to_string()
+        } else if !fitted {
+            "assumed".to_string()
+        } else if let Some(e) = spread.filter(|e| !e.determined) {
+            let relative = e.std_error.map_or("no estimate".to_string(), |s| {
+                format!("± {:.0} %", 100.0 * s / e.value.abs())
+            });
+            format!("NOT DETERMINED by the data ({param} {relative}: the fitted curves barely depend on it)")
         } else {
-            "assumed"
+            "determined".to_string()
         }
     };
     let k = &ctx.data.known;
     out.push(format!(
         "E1·τ = {:.5e} N/m (warp, small strain): {}",
         e1 * tau,
-        source(!strips[0].is_empty(), k.a11.is_some())
+        source(!strips[0].is_empty(), k.a11.is_some(), "a11_pa")
     ));
     out.push(format!(
         "E2·τ = {:.5e} N/m (weft, small strain): {}",
         e2 * tau,
-        source(!strips[1].is_empty(), k.a22.is_some())
+        source(!strips[1].is_empty(), k.a22.is_some(), "a22_pa")
     ));
     out.push(format!(
         "(1/G − 2ν12/E1)/τ = {:.5e} m/N (off-axis compliance, small strain): {}",
         (1.0 / g - 2.0 * nu12 / e1) / tau,
-        source(!strips[2].is_empty(), k.g12.is_some())
+        source(!strips[2].is_empty(), k.g12.is_some(), "g12_pa")
     ));
     out.push(match ctx.a12 {
         A12Rule::HalfMin => format!(

@@ -188,5 +188,8 @@ fn a_law_strip_is_solved_on_a_mesh_that_meets_the_lab_tolerance() {
     z.write(&dir, "lab mesh").unwrap();
     let csv = std::fs::read_to_string(dir.join("lab.csv")).unwrap();
     let _ = std::fs::remove_dir_all(&dir);
-    assert!(csv.starts_with("angle_deg,mesh,estimated_error\n90,12x12,"), "{csv}");
+    assert!(
+        csv.starts_with("angle_deg,mesh,estimated_error\n90,12x12,"),
+        "{csv}"
+    );
 }
