@@ -190,12 +190,13 @@ fn strip_mesh(
 ) -> Result<(LabMesh, Vec<(f64, f64)>), SynthError> {
     use crate::converge::{analyse_monotone, Chosen, ErrorMeasure, Level};
     let (width, gauge) = p.strip;
+    let shell = LabModel::Shell(m.clone());
     let mut levels = Vec::new();
     let mut curves = Vec::new();
     for &across in &STRIP_LADDER {
         let mesh = (across, strip_along(across, width, gauge));
         let t0 = std::time::Instant::now();
-        let curve = match law_curve(m, p, angle, mesh) {
+        let curve = match law_curve(&shell, p, angle, mesh) {
             Ok(c) => c,
             // a finer level that does not solve leaves the coarser ones' choice
             Err(_) if !levels.is_empty() => break,
@@ -228,17 +229,17 @@ fn strip_along(across: usize, width: f64, gauge: f64) -> usize {
     ((across as f64 * gauge / width).round() as usize).max(across)
 }
 
-/// The exact curve of a law fabric's strip cut at `cut` degrees, measured by the shell on
+/// The exact curve of a law fabric's strip cut at `cut` degrees, measured by `model` on
 /// `mesh` at [`SOLVED_POINTS`] elongations: (elongation m, force N) from zero.
 fn law_curve(
-    m: &FabricMaterial,
+    model: &LabModel,
     p: &Protocol,
     cut: f64,
     mesh: (usize, usize),
 ) -> Result<Vec<(f64, f64)>, SynthError> {
     let (width, gauge) = p.strip;
     let elongations = lab_elongations(p);
-    let strip = LabModel::Shell(m.clone()).strip(
+    let strip = model.strip(
         (width, gauge, cut),
         mesh,
         (STRIP_GRADING, YarnRule::Auto),
@@ -272,43 +273,33 @@ fn lab_curve(
     let p = &fabric.protocol;
     let (width, gauge) = p.strip;
     let top = p.max_strain * gauge;
-    let elongations = lab_elongations(p);
-    if let (Source::Law(m), Some(mesh)) = (&fabric.source, mesh) {
-        return law_curve(m, p, cut, mesh).and_then(|c| carries_force(c, cut, top));
-    }
-    let forces: Vec<f64> = match &fabric.source {
-        Source::Law(m) => {
-            let across = STRIP_FACES_ACROSS;
-            let along = strip_along(across, width, gauge);
-            let strip = lab_model(m, fabric.lab).strip(
-                (width, gauge, cut),
-                (across, along),
-                (STRIP_GRADING, YarnRule::Auto),
-                &elongations,
+    let curve = match (&fabric.source, mesh) {
+        (Source::Law(m), Some(mesh)) => law_curve(&LabModel::Shell(m.clone()), p, cut, mesh)?,
+        (Source::Law(m), None) => {
+            let mesh = (
+                STRIP_FACES_ACROSS,
+                strip_along(STRIP_FACES_ACROSS, width, gauge),
             );
-            let strip = strip.map_err(|source| SynthError::Scene {
-                test: String::new(),
-                source,
-            })?;
-            strip.iter().map(|f| f.0).collect()
+            law_curve(&lab_model(m, fabric.lab), p, cut, mesh)?
         }
-        Source::Analytic {
-            warp, weft, bias, ..
-        } => {
+        (
+            Source::Analytic {
+                warp, weft, bias, ..
+            },
+            _,
+        ) => {
             // the nearest of warp (90°), bias (45°) and weft (0°)
             let family = match cut {
                 a if a >= 67.5 => warp,
                 a if a <= 22.5 => weft,
                 _ => bias,
             };
-            elongations
-                .iter()
-                .map(|e| family.force(width, e / gauge))
-                .collect()
+            let points = lab_elongations(p)
+                .into_iter()
+                .map(|e| (e, family.force(width, e / gauge)));
+            std::iter::once((0.0, 0.0)).chain(points).collect()
         }
     };
-    let mut curve = vec![(0.0, 0.0)];
-    curve.extend(elongations.into_iter().zip(forces));
     carries_force(curve, cut, top)
 }
 
