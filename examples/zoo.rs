@@ -339,6 +339,7 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
     let mut errors: Vec<Vec<(f64, String)>> = vec![Vec::new(); QUANTITIES.len()];
     let mut undetermined: Vec<Vec<String>> = vec![Vec::new(); QUANTITIES.len()];
     let mut unconverged = String::new();
+    let mut unloadable = String::new();
     for f in fits.iter().filter(|f| f.model == "kl" && f.has_material) {
         // data off the law by more than the lab's tolerance have no truth to recover
         if let Some(why) = lab_unconverged(&dir.join(&f.zoo_name)) {
@@ -346,11 +347,16 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
             continue;
         }
         let truth = dir.join(&f.zoo_name).join("truth.toml");
-        let (Ok(t), Ok(m)) = (
-            load_material(&truth),
-            load_material(&dir.join("fits").join(&f.fabric).join("material.toml")),
-        ) else {
+        if !truth.exists() {
             continue;
+        }
+        let fitted = dir.join("fits").join(&f.fabric).join("material.toml");
+        let (t, m) = match (load_material(&truth), load_material(&fitted)) {
+            (Ok(t), Ok(m)) => (t, m),
+            (Err(e), _) | (_, Err(e)) => {
+                let _ = writeln!(unloadable, "* {}: {e}", f.fabric);
+                continue;
+            }
         };
         // what the data can determine: no rigidities without bends, no yarns where they are known
         let dataset = std::fs::read_to_string(dir.join(&f.zoo_name).join("fabric.toml"));
@@ -409,6 +415,12 @@ fn truth_table(dir: &Path, fits: &[Fit]) -> String {
                 fabrics.join(", ")
             );
         }
+    }
+    if !unloadable.is_empty() {
+        let _ = write!(
+            s,
+            "\nLeft out above: fitted law fabrics whose truth or fitted material file does not load:\n\n{unloadable}"
+        );
     }
     if !unconverged.is_empty() {
         let _ = write!(

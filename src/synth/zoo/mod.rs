@@ -240,6 +240,7 @@ fn draw_material(rng: &mut Rng, name: &str) -> FabricMaterial {
     law.warp = draw_eta(rng, 300.0);
     law.weft = draw_eta(rng, 300.0);
     law.shear = draw_eta(rng, 100.0);
+    rising_cutoffs(&mut law);
     let areal_density = draw_density(rng);
     let (warp, weft) = draw_rigidities(rng, areal_density);
     let bending = BendingRigidity::following(warp, weft, &law).ok();
@@ -249,6 +250,22 @@ fn draw_material(rng: &mut Rng, name: &str) -> FabricMaterial {
         thickness: tau,
         law,
         bending,
+    }
+}
+
+/// Cut-offs at 95 % of the Green strain where a direction's stress stops rising (a softening
+/// term can make it stop below 1), past which the law goes on along its tangent: what the
+/// material file asks of such a law, so that the truth's file loads and is the lab's law.
+fn rising_cutoffs(law: &mut Orthotropic) {
+    for (eta, cut) in [
+        (&law.warp, &mut law.cutoffs.e11),
+        (&law.weft, &mut law.cutoffs.e22),
+        (&law.shear, &mut law.cutoffs.e12),
+    ] {
+        if let Some(peak) = eta.stress_peak(1.0) {
+            let to = 0.95 * peak;
+            *cut = (cut.0.max(-to), cut.1.min(to));
+        }
     }
 }
 

@@ -36,6 +36,9 @@ fn drawn_materials_stay_in_their_ranges_and_are_valid() {
         }
         let b = m.bending.expect("a rigidity for every law fabric");
         assert!(b.warp > 0.0 && b.weft > 0.0 && b.twist > 0.0);
+        // the truth's material file loads (a law whose stress stops rising is cut off first)
+        let text = crate::material::material_toml(m);
+        crate::material::parse_material(&text, &f.name).unwrap_or_else(|e| panic!("{e}"));
         let p = &f.protocol;
         assert!(p.bias_only || (3..=9).contains(&p.angles.len()));
         assert!((1..=5).contains(&p.repeats) && (5..=2000).contains(&p.points));
