@@ -3,7 +3,8 @@
 //! 1. every strip whose estimated discretisation error exceeds a third of its curves' fit error
 //!    and 0.3 % is refined once more (faces doubled across and along, on top of the ladder's
 //!    last level), and the stages whose fitted strips were refined are refitted warm from their
-//!    optimum, until every strip meets its tolerance;
+//!    optimum (with the joint sweep, the yarn stiffnesses fitted over a refined off-axis strip
+//!    too), until every strip meets its tolerance;
 //! 2. a fit whose mesh check fails on the material (a determined quantity of a stage moving by
 //!    1 % or more) has that stage's strip with the largest estimated mesh error refined and
 //!    refitted, and is checked again (the bends likewise for the thickness or rigidities, or a
@@ -358,21 +359,32 @@ fn double_and_refit(
         f.lab.meshes.strips[*s] += 1;
     }
     let stages = &sets.own;
+    let refined = |set: &[usize]| set.iter().any(|s| todo.iter().any(|t| t.0 == *s));
     let first = (0..stages.len())
-        .find(|&k| stages[k].iter().any(|s| todo.iter().any(|t| t.0 == *s)))
+        .find(|&k| refined(&stages[k]))
         .unwrap_or(stages.len());
-    for k in first..stages.len() {
+    for k in 0..stages.len() {
         if stages[k].is_empty() {
             continue;
         }
-        f.journal.say(&format!(
-            "{} stage refitted on its strips' own meshes",
-            maps[k].dir.name()
-        ));
-        super::ladder::refit(f, maps[k], &stages[k], last, false, StageMode::Full)?;
-        // a yarn stage's joint stiffness follows it (an off-axis strip refined alone leaves
-        // the yarn stiffnesses as fitted: the mesh check measures what that leaves)
-        super::joint::joint_stiffness(f, maps[k], k, sets, last)?;
+        if k >= first {
+            f.journal.say(&format!(
+                "{} stage refitted on its strips' own meshes",
+                maps[k].dir.name()
+            ));
+            super::ladder::refit(f, maps[k], &stages[k], last, false, StageMode::Full)?;
+        }
+        // a yarn stiffness fitted over a refined strip (the joint sweep's: its own and every
+        // off-axis strip) is refitted too, so the sweep stands at the refined meshes' optimum
+        // and not at a compromise with the coarser strips' discretisation error
+        let joint_refined = sets
+            .joint
+            .as_ref()
+            .and_then(|j| j.get(k))
+            .is_some_and(|set| refined(set));
+        if k >= first || joint_refined {
+            super::joint::joint_stiffness(f, maps[k], k, sets, last)?;
+        }
     }
     super::pipeline::bend_stage(f, last)?;
     Ok(())
