@@ -348,6 +348,7 @@ mod tests {
             degree_log: vec!["warp: degree 1 <kept>".into()],
             notes: Vec::new(),
             identifiability: Vec::new(),
+            a12_dependence: [None; 3],
             uncertainty: Vec::new(),
             tests: Vec::new(),
             max_error: 0.1,

@@ -58,6 +58,7 @@ pub mod optim;
 mod options;
 mod pipeline;
 pub mod plausible;
+pub mod poisson;
 pub mod preprocess;
 mod refine;
 pub mod report;
@@ -275,6 +276,9 @@ pub struct FitResult {
     pub notes: Vec<String>,
     /// what the data determine and what is assumed
     pub identifiability: Vec<String>,
+    /// how much the warp, weft and off-axis strips' forces move with a12 = 0 at the same
+    /// small-strain quantities ([`poisson`]); `None` where not checked
+    pub a12_dependence: [Option<f64>; 3],
     /// standard errors of the fitted parameters at the optimum, last mesh level
     pub uncertainty: Vec<uncertainty::ParamError>,
     pub tests: Vec<TestOutcome>,

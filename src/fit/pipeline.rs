@@ -12,8 +12,9 @@ use super::measures::{self, Misfit, Objective};
 use super::mesh_check::{MeshCheck, MeshCheckMode};
 use super::refine::TestMeshes;
 use super::{
-    bending, coupling, is_determined, joint, ladder, preprocess, refine, rigs, stages, thickness,
-    uncertainty, validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted, Fitter,
+    bending, coupling, is_determined, joint, ladder, poisson, preprocess, refine, rigs, stages,
+    thickness, uncertainty, validation, Context, FitError, FitOptions, FitResult, FitStats, Fitted,
+    Fitter,
 };
 use crate::dataset::{FabricDataset, Role};
 use crate::material::{Cutoffs, Eta, Orthotropic};
@@ -63,7 +64,10 @@ pub fn fit(
     let t0 = Instant::now();
     let (mut bench, fitted) = f.bench();
     let tests = validation::outcomes(&mut bench, fitted, last)?;
-    let identifiability = validation::identifiability(&f.ctx, &f.fitted, &strips, &uncertainty);
+    let (mut bench, fitted) = f.bench();
+    let a12_dependence = poisson::a12_dependence(&mut bench, fitted, &strips, last)?;
+    let identifiability =
+        validation::identifiability(&f.ctx, &f.fitted, &strips, &uncertainty, &a12_dependence);
     if let Some(m) = &mesh_check {
         let (mut bench, fitted) = f.bench();
         bench.mesh_check_notes(fitted, last, m);
@@ -82,6 +86,7 @@ pub fn fit(
         degree_log,
         notes,
         identifiability,
+        a12_dependence,
         uncertainty,
         tests,
         max_error: opts.max_error,

@@ -13,6 +13,7 @@
 
 use super::journal::Journal;
 use super::map::A12Rule;
+use super::poisson::A12_DEPENDENCE_TOL;
 use super::preprocess::Curve;
 use super::tolerances::INTERPOLATION_TOL;
 use super::uncertainty::ParamError;
@@ -429,11 +430,14 @@ fn bend_outcomes(
 /// A quantity that strips were fitted to is still only "determined" where the fit's standard
 /// errors say its parameter is (`uncertainty`: a stiffness the curves barely depend on, such as
 /// the shear of wide off-axis strips whose yarns run from jaw to jaw, is not).
+/// A quantity determined by strips whose forces depend on the assumed a12 (`a12_dependence`,
+/// [`super::poisson`]) is determined only with that a12, and the line says by how much.
 pub(super) fn identifiability(
     ctx: &Context,
     m: &Fitted,
     strips: &[Vec<usize>],
     uncertainty: &[ParamError],
+    a12_dependence: &[Option<f64>; 3],
 ) -> Vec<String> {
     let l = &m.law;
     let tau = m.thickness;
@@ -442,7 +446,7 @@ pub(super) fn identifiability(
     let nu12 = l.a12 / l.a22;
     let g = 0.5 * l.g12;
     let mut out = Vec::new();
-    let source = |fitted: bool, known: bool, param: &str| {
+    let source = |fitted: bool, known: bool, param: &str, k: usize| {
         let spread = uncertainty.iter().find(|e| e.name == param);
         if known {
             "known".to_string()
@@ -453,6 +457,12 @@ pub(super) fn identifiability(
                 format!("± {:.0} %", 100.0 * s / e.value.abs())
             });
             format!("NOT DETERMINED by the data ({param} {relative}: the fitted curves barely depend on it)")
+        } else if let Some(d) = a12_dependence[k].filter(|&d| d > A12_DEPENDENCE_TOL) {
+            format!(
+                "determined only with the assumed a12: with a12 = 0 and this value the {} strips' small-strain force moves by {:.1} % (their jaws hold the contraction; give [known] poisson_12 or a12_pa to pin it)",
+                ["warp", "weft", "off-axis"][k],
+                100.0 * d
+            )
         } else {
             "determined".to_string()
         }
@@ -461,17 +471,17 @@ pub(super) fn identifiability(
     out.push(format!(
         "E1·τ = {:.5e} N/m (warp, small strain): {}",
         e1 * tau,
-        source(!strips[0].is_empty(), k.a11.is_some(), "a11_pa")
+        source(!strips[0].is_empty(), k.a11.is_some(), "a11_pa", 0)
     ));
     out.push(format!(
         "E2·τ = {:.5e} N/m (weft, small strain): {}",
         e2 * tau,
-        source(!strips[1].is_empty(), k.a22.is_some(), "a22_pa")
+        source(!strips[1].is_empty(), k.a22.is_some(), "a22_pa", 1)
     ));
     out.push(format!(
         "(1/G − 2ν12/E1)/τ = {:.5e} m/N (off-axis compliance, small strain): {}",
         (1.0 / g - 2.0 * nu12 / e1) / tau,
-        source(!strips[2].is_empty(), k.g12.is_some(), "g12_pa")
+        source(!strips[2].is_empty(), k.g12.is_some(), "g12_pa", 2)
     ));
     out.push(match ctx.a12 {
         A12Rule::HalfMin => format!(

@@ -228,6 +228,7 @@ mod tests {
             degree_log: Vec::new(),
             notes: Vec::new(),
             identifiability: Vec::new(),
+            a12_dependence: [None; 3],
             uncertainty: Vec::new(),
             tests,
             max_error: 0.1,

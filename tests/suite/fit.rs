@@ -170,6 +170,31 @@ fn noise_free_degree2_data_are_fitted_back() {
         equilibria >= fit["objective_evaluations"].as_integer().unwrap(),
         "{equilibria} equilibria"
     );
+    // what the assumed a12 does to the small-strain quantities (`fit/poisson.rs`): each
+    // stage's dependence is written, and its identifiability line follows the tolerance
+    let ident: Vec<&str> = fit["identifiability"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|l| l.as_str())
+        .collect();
+    for (key, quantity) in [
+        ("a12_dependence_warp", "E1·τ"),
+        ("a12_dependence_weft", "E2·τ"),
+        ("a12_dependence_off_axis", "(1/G"),
+    ] {
+        let d = fit[key]
+            .as_float()
+            .unwrap_or_else(|| panic!("{key}: {fit:?}"));
+        assert!((0.0..0.2).contains(&d), "{key} = {d}");
+        let line = ident.iter().find(|l| l.starts_with(quantity)).unwrap();
+        let tol = kshell::fit::poisson::A12_DEPENDENCE_TOL;
+        assert_eq!(
+            line.contains("only with the assumed a12"),
+            d > tol,
+            "{line}"
+        );
+    }
     let tests = fit["test"].as_array().expect("[[fit.test]]");
     let mut kinds = Vec::new();
     for t in tests {

@@ -109,6 +109,7 @@ fn cotton_like() -> FitResult {
         degree_log: Vec::new(),
         notes: vec!["a note".into()],
         identifiability: Vec::new(),
+        a12_dependence: [None; 3],
         uncertainty: Vec::new(),
         tests,
         max_error: 0.1,

@@ -131,6 +131,14 @@ fn notes_and_verdict(s: &mut String, r: &FitResult) {
     let _ = writeln!(s, "notes = [{}]", notes.join(", "));
     let ident: Vec<String> = r.identifiability.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "identifiability = [{}]", ident.join(", "));
+    for (name, d) in ["warp", "weft", "off_axis"].iter().zip(r.a12_dependence) {
+        if let Some(d) = d {
+            let _ = writeln!(
+                s,
+                "a12_dependence_{name} = {d:.6}    # relative change of these strips' smallest-elongation force with a12 = 0 at the same E1, E2 and off-axis compliance"
+            );
+        }
+    }
     let log: Vec<String> = r.degree_log.iter().map(|n| toml_str(n)).collect();
     let _ = writeln!(s, "degree_choice = [{}]", log.join(", "));
     let verdict = crate::fit::verdict::verdict(r, r.max_error);
