@@ -481,7 +481,7 @@ fn fit_determined(material: &Path) -> impl Fn(&str) -> Said {
             _ => "",
         };
         let dependence = fit
-            .and_then(|f| f.get(&format!("a12_dependence_{strips}")))
+            .and_then(|f| f.get(format!("a12_dependence_{strips}")))
             .and_then(|d| d.as_float())
             .unwrap_or(0.0);
         if !determined {
