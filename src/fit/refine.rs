@@ -4,7 +4,7 @@
 //!    and 0.3 % is refined once more (faces doubled across and along, on top of the ladder's
 //!    last level), and the stages whose fitted strips were refined are refitted warm from their
 //!    optimum (with the joint sweep, the yarn stiffnesses fitted over a refined off-axis strip
-//!    that was off by 1 % or more too), until every strip meets its tolerance;
+//!    estimated 1 % or more off on its coarser mesh too), until every strip meets its tolerance;
 //! 2. a fit whose mesh check fails on the material (a determined quantity of a stage moving by
 //!    1 % or more) has that stage's strip with the largest estimated mesh error refined and
 //!    refitted, and is checked again (the bends likewise for the thickness or rigidities, or a
@@ -338,10 +338,10 @@ fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_mov
 /// Doubles the meshes of the strips in `todo` (each with the reason, for the notes), then
 /// refits the first stage holding one of them and every later stage (they were fitted given
 /// the earlier laws), then the bends, as each ladder level does. With the joint sweep, a yarn
-/// stiffness fitted over a refined strip whose estimated mesh error (`checks`) was
-/// [`MESH_PARAM_TOL`] or more is refitted too: the sweep then stands at the refined meshes'
-/// optimum, not at a compromise with the coarser strip's discretisation error (a strip off by
-/// less moves the stiffness by less than the mesh check's own criterion).
+/// stiffness fitted over a refined strip whose estimated mesh error on its coarser mesh
+/// (`checks`) is [`MESH_PARAM_TOL`] or more is refitted too: the sweep then stands at the
+/// refined meshes' optimum, not at a compromise with the coarser strip's discretisation error
+/// (a strip off by less moves the stiffness by less than the mesh check's own criterion).
 fn double_and_refit(
     f: &mut Fitter,
     maps: &[StageMap],
