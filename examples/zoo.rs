@@ -17,6 +17,9 @@ use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+#[path = "zoo/best_law.rs"]
+mod best_law;
+
 /// The triangle models a zoo fabric is also fitted with, every `--models-every` fabrics.
 const TRI_MODELS: [&str; 4] = ["springs", "soft-constraints", "stvk-ds", "xpbd"];
 
@@ -309,6 +312,17 @@ fn summary(dir: &Path) -> Result<String, String> {
         );
     }
     s += &truth_table(dir, &fits);
+    let analytic: Vec<(String, PathBuf)> = fits
+        .iter()
+        .filter(|f| f.model == "kl" && f.has_material && f.zoo_name.ends_with("-analytic"))
+        .map(|f| {
+            let material = dir.join("fits").join(&f.fabric).join("material.toml");
+            (f.fabric.clone(), material)
+        })
+        .collect();
+    if !analytic.is_empty() {
+        s += &best_law::table(dir, &analytic);
+    }
     s += &unbuilt(dir);
     s += "\n## Fits that ended without a material\n\n";
     for f in run.iter().filter(|f| !f.has_material) {
