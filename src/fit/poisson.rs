@@ -20,7 +20,6 @@
 
 use super::{Bench, FitError, Fitted, Work};
 use crate::material::Orthotropic;
-use crate::scene::TensileStrip;
 
 /// Largest relative change of a stage's strips' small-strain forces, with a12 set to 0 at the same
 /// small-strain quantities, for which the stage's quantity is still called determined whatever
@@ -79,14 +78,8 @@ pub(super) fn a12_dependence(
             let Some(&first) = strip.nodes.first() else {
                 continue;
             };
-            let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
             let own = bench.lab.meshes.strip_level(s, last);
-            t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
-            t.grading = bench.ctx.opts.grading;
-            t.yarn_rule = bench.lab.strip_yarns(bench.ctx.opts, strip.angle_deg);
-            t.yarn_ratio = bench.lab.yarn_ratio();
-            t.solver.rtol = super::FIT_RTOL;
-            t.solver.strategy = bench.ctx.opts.strategy;
+            let t = bench.lab.strip_scene(bench.ctx, s, strip.angle_deg, own);
             for mat in [&material, &other] {
                 let rig = t.rig(mat, &[first]).map_err(|source| FitError::Scene {
                     stage: format!("setting up the {}° strip without a12", strip.angle_deg),

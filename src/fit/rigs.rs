@@ -75,11 +75,6 @@ impl Lab {
         self.yarns.unwrap_or(YarnRule::Full)
     }
 
-    /// The yarn-to-shear ratio that sets new strips' β.
-    pub(super) fn yarn_ratio(&self) -> Option<f64> {
-        self.yarn_ratio
-    }
-
     /// A warm strip, if one is set up under `key`.
     pub(super) fn warm_rig(&self, key: &RigKey) -> Option<&StripRig> {
         self.rigs.get(key)
@@ -130,6 +125,27 @@ impl Lab {
         ))
     }
 
+    /// Strip `s` cut at `angle` on mesh `level` (its own, resolved) as the fit solves it:
+    /// graded, with the lab's yarn rule and ratio, the fit's tolerance and strategy.
+    pub(super) fn strip_scene(
+        &self,
+        ctx: &Context,
+        s: usize,
+        angle: f64,
+        level: (usize, usize),
+    ) -> TensileStrip {
+        let strip = &ctx.prep.strips[s];
+        let mut t = TensileStrip::new(strip.width, strip.length, angle);
+        t.mesh = strip_mesh(level, strip.width, strip.length);
+        t.grading = ctx.opts.grading;
+        t.yarn_rule = self.strip_yarns(ctx.opts, angle);
+        t.yarn_ratio = self.yarn_ratio;
+        // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
+        t.solver.rtol = FIT_RTOL;
+        t.solver.strategy = ctx.opts.strategy;
+        t
+    }
+
     /// The rig of strip `s` cut at `angle` on a mesh level for material `m`: from the cache
     /// (warm) or set up; hand it back with [`Lab::keep_rig`].
     pub(super) fn strip_rig(
@@ -146,14 +162,7 @@ impl Lab {
         if let Some(rig) = self.rigs.remove(&key) {
             return Ok((key, rig));
         }
-        let mut t = TensileStrip::new(strip.width, strip.length, angle);
-        t.mesh = strip_mesh(level, strip.width, strip.length);
-        t.grading = ctx.opts.grading;
-        t.yarn_rule = self.strip_yarns(ctx.opts, angle);
-        t.yarn_ratio = self.yarn_ratio;
-        // forces to 1e-8 are far inside any fit's reach; 1e-10 made Newton crawl at round-off
-        t.solver.rtol = FIT_RTOL;
-        t.solver.strategy = ctx.opts.strategy;
+        let t = self.strip_scene(ctx, s, angle, level);
         let mut rig = t
             .rig(&m.material(ctx.data), &strip.nodes)
             .map_err(|source| FitError::Scene {

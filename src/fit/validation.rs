@@ -19,7 +19,7 @@ use super::tolerances::INTERPOLATION_TOL;
 use super::uncertainty::ParamError;
 use super::{Bench, Context, FitError, Fitted, TestOutcome, Work};
 use crate::dataset::Role;
-use crate::scene::{CantileverBend, TensileStrip};
+use crate::scene::CantileverBend;
 
 impl Bench<'_, '_> {
     /// Mean |relative error| of curve `c` with its strip cut at `angle` on a mesh level, and
@@ -110,7 +110,6 @@ impl Bench<'_, '_> {
                 mids.push(0.5 * (prev + e));
                 prev = e;
             }
-            let mut t = TensileStrip::new(strip.width, strip.length, strip.angle_deg);
             // on the mesh and the discretisation its nodes were solved on (a strip refined on
             // its own is compared with itself, not with the ladder's mesh, and a node rig set
             // up on an earlier ladder level keeps that level's centre-rule β: either
@@ -118,12 +117,10 @@ impl Bench<'_, '_> {
             let own = self.lab.meshes.strip_level(s, level);
             let key = self.ctx.rig_key(s, strip.angle_deg, own);
             let node_rig = self.lab.warm_rig(&key);
-            t.mesh = super::rigs::strip_mesh(own, strip.width, strip.length);
-            t.grading = self.ctx.opts.grading;
-            t.yarn_rule = self.lab.strip_yarns(self.ctx.opts, strip.angle_deg);
-            t.yarn_ratio = node_rig.map_or(self.lab.yarn_ratio(), |r| r.yarn_ratio());
-            t.solver.rtol = super::FIT_RTOL;
-            t.solver.strategy = self.ctx.opts.strategy;
+            let mut t = self.lab.strip_scene(self.ctx, s, strip.angle_deg, own);
+            if let Some(r) = node_rig {
+                t.yarn_ratio = r.yarn_ratio();
+            }
             let mut rig = t.rig(&material, &mids).map_err(|source| FitError::Scene {
                 stage: format!("checking the {}° strip's interpolation", strip.angle_deg),
                 source,
