@@ -43,12 +43,25 @@ pub enum Misfit {
     Log,
 }
 
+/// The model-to-measured force ratio below which the log misfit goes on along its tangent
+/// at that ratio (a misfit of ln 0.1 = −2.30, a point 90 % low): finite and with a slope for
+/// a model force that is zero or negative (a strip compressed in its toe, an interpolated
+/// toe below zero), where ln(F̂/F) has none; above it the misfit is the logarithm exactly.
+pub const LOG_TANGENT_BELOW: f64 = 0.1;
+
 impl Misfit {
-    /// The misfit of model force `model` against measured `data` (both positive).
+    /// The misfit of model force `model` against measured `data` (`data` positive).
     pub fn of(self, model: f64, data: f64) -> f64 {
         match self {
             Self::Relative => (model - data) / data,
-            Self::Log => (model / data).ln(),
+            Self::Log => {
+                let q = model / data;
+                if q >= LOG_TANGENT_BELOW {
+                    q.ln()
+                } else {
+                    LOG_TANGENT_BELOW.ln() + (q - LOG_TANGENT_BELOW) / LOG_TANGENT_BELOW
+                }
+            }
         }
     }
 
@@ -56,23 +69,27 @@ impl Misfit {
     pub fn slope(self, model: f64, data: f64) -> f64 {
         match self {
             Self::Relative => 1.0 / data,
-            Self::Log => 1.0 / model,
+            Self::Log => 1.0 / model.max(LOG_TANGENT_BELOW * data),
         }
     }
 
     /// The change of the misfit against `data` when the model force goes from `from` to `to`.
     pub fn change(self, from: f64, to: f64, data: f64) -> f64 {
+        let floor = LOG_TANGENT_BELOW * data;
         match self {
             Self::Relative => (to - from) / data,
-            Self::Log => (to / from).ln(),
+            Self::Log if from >= floor && to >= floor => (to / from).ln(),
+            Self::Log => self.of(to, data) - self.of(from, data),
         }
     }
 
     /// The relative error F̂/F − 1 of a misfit.
     pub fn relative(self, misfit: f64) -> f64 {
+        let knee = LOG_TANGENT_BELOW.ln();
         match self {
             Self::Relative => misfit,
-            Self::Log => misfit.exp_m1(),
+            Self::Log if misfit >= knee => misfit.exp_m1(),
+            Self::Log => LOG_TANGENT_BELOW * (1.0 + misfit - knee) - 1.0,
         }
     }
 
@@ -158,7 +175,9 @@ mod tests {
     #[test]
     fn misfits_slopes_and_inverses() {
         for m in [Misfit::Relative, Misfit::Log] {
-            for (model, data) in [(1.3, 1.0), (0.6, 2.0), (5.0, 4.9)] {
+            // the last two on the log misfit's tangent (a model force 5 % of the measured,
+            // and a negative one)
+            for (model, data) in [(1.3, 1.0), (0.6, 2.0), (5.0, 4.9), (0.05, 1.0), (-0.3, 2.0)] {
                 let h = 1e-6 * model;
                 let fd = (m.of(model + h, data) - m.of(model - h, data)) / (2.0 * h);
                 assert!(
@@ -172,6 +191,11 @@ mod tests {
                 assert!((ch - diff).abs() < 1e-14, "{m:?}");
             }
         }
+        // the log misfit and its slope are continuous where its tangent takes over
+        let knee = super::LOG_TANGENT_BELOW;
+        let (lo, hi) = (knee * (1.0 - 1e-12), knee * (1.0 + 1e-12));
+        assert!((Misfit::Log.of(lo, 1.0) - Misfit::Log.of(hi, 1.0)).abs() < 1e-10);
+        assert!((Misfit::Log.slope(lo, 1.0) / Misfit::Log.slope(hi, 1.0) - 1.0).abs() < 1e-10);
         // equal to first order, and symmetric in a scale only for the log
         assert!((Misfit::Log.of(1.001, 1.0) - Misfit::Relative.of(1.001, 1.0)).abs() < 1e-6);
         assert_eq!(Misfit::Log.of(2.0, 1.0), -Misfit::Log.of(1.0, 2.0));
