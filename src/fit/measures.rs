@@ -43,14 +43,14 @@ pub enum Misfit {
     Log,
 }
 
-/// The model-to-measured force ratio below which the log misfit goes on along its tangent
+/// The ratio of model force to data force below which the log misfit goes on along its tangent
 /// at that ratio (a misfit of ln 0.1 = −2.30, a point 90 % low): finite and with a slope for
 /// a model force that is zero or negative (a strip compressed in its toe, an interpolated
 /// toe below zero), where ln(F̂/F) has none; above it the misfit is the logarithm exactly.
 pub const LOG_TANGENT_BELOW: f64 = 0.1;
 
 impl Misfit {
-    /// The misfit of model force `model` against measured `data` (`data` positive).
+    /// The misfit of model force `model` against the data's force `data` (positive).
     pub fn of(self, model: f64, data: f64) -> f64 {
         match self {
             Self::Relative => (model - data) / data,
@@ -175,7 +175,7 @@ mod tests {
     #[test]
     fn misfits_slopes_and_inverses() {
         for m in [Misfit::Relative, Misfit::Log] {
-            // the last two on the log misfit's tangent (a model force 5 % of the measured,
+            // the last two on the log misfit's tangent (a model force 5 % of the data's,
             // and a negative one)
             for (model, data) in [(1.3, 1.0), (0.6, 2.0), (5.0, 4.9), (0.05, 1.0), (-0.3, 2.0)] {
                 let h = 1e-6 * model;
