@@ -134,27 +134,17 @@ fn curve_scales(
     strips: &[usize],
     level: (usize, usize),
 ) -> Result<Vec<f64>, FitError> {
-    let jobs: Vec<(usize, f64)> = strips
-        .iter()
-        .map(|&s| (s, f.ctx.prep.strips[s].angle_deg))
-        .collect();
-    let nodes = f
-        .lab
-        .predict_many(&f.ctx, &f.fitted, &mut f.stats, &jobs, level)?;
     let mut out = Vec::new();
-    for (&s, node) in strips.iter().zip(&nodes) {
-        for c in f.ctx.used_curves(&[s]) {
-            let model = f.ctx.curve_forces(c, node);
-            let q: Vec<f64> = f.ctx.prep.curves[c]
-                .points
-                .iter()
-                .zip(&model)
-                .map(|(m, p)| p / m.1)
-                .filter(|q| q.is_finite())
-                .collect();
-            if !q.is_empty() {
-                out.push(super::verdict::force_scale(&q).0);
-            }
+    for (c, model) in super::ladder::fitted_curve_forces(f, strips, level)? {
+        let q: Vec<f64> = f.ctx.prep.curves[c]
+            .points
+            .iter()
+            .zip(&model)
+            .map(|(m, p)| p / m.1)
+            .filter(|q| q.is_finite())
+            .collect();
+        if !q.is_empty() {
+            out.push(super::verdict::force_scale(&q).0);
         }
     }
     Ok(out)

@@ -262,6 +262,17 @@ fn fitted_forces(
     strips: &[usize],
     level: (usize, usize),
 ) -> Result<Vec<f64>, FitError> {
+    let curves = fitted_curve_forces(f, strips, level)?;
+    Ok(curves.into_iter().flat_map(|(_, forces)| forces).collect())
+}
+
+/// The fitted material's force at every point of each fitted curve of `strips` on `level`:
+/// (curve, forces), curve by curve in strip order.
+pub(super) fn fitted_curve_forces(
+    f: &mut Fitter,
+    strips: &[usize],
+    level: (usize, usize),
+) -> Result<Vec<(usize, Vec<f64>)>, FitError> {
     let jobs: Vec<(usize, f64)> = strips
         .iter()
         .map(|&s| (s, f.ctx.prep.strips[s].angle_deg))
@@ -272,7 +283,7 @@ fn fitted_forces(
     let mut out = Vec::new();
     for (&s, node) in strips.iter().zip(&nodes) {
         for c in f.ctx.used_curves(&[s]) {
-            out.extend(f.ctx.curve_forces(c, node));
+            out.push((c, f.ctx.curve_forces(c, node)));
         }
     }
     Ok(out)
