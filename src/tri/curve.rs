@@ -14,6 +14,9 @@ pub struct Stiffness {
     pub k: Vec<f64>,
 }
 
+/// Strains a spline piece at which [`Stiffness::stress_rises`] checks the tangent stiffness.
+pub const TANGENT_SAMPLES: usize = 16;
+
 /// A stiffness that cannot be used.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StiffnessError {
@@ -121,6 +124,23 @@ impl Stiffness {
         }
     }
 
+    /// Whether the stress σ = k(ε) ε rises over the spline's range: its tangent stiffness
+    /// dσ/dε = k + k′ε is positive at [`TANGENT_SAMPLES`] strains a piece, ends included.
+    /// Outside the range k is constant, so σ rises there with the end value. A stress that
+    /// falls as the strain grows is unstable: a strip under it splits into a stretched band
+    /// and a slack one, whose mean force can follow a toe while no off-axis strip solves.
+    pub fn stress_rises(&self) -> bool {
+        let n = self.k.len();
+        if n == 1 {
+            return self.k[0] > 0.0;
+        }
+        let pieces = (n - 1) * TANGENT_SAMPLES;
+        (0..=pieces).all(|j| {
+            let e = self.lo + (self.hi - self.lo) * j as f64 / pieces as f64;
+            self.density(e).2 > 0.0
+        })
+    }
+
     /// The stiffness scaled by `s` (every control value).
     pub fn scaled(&self, s: f64) -> Self {
         Self {
@@ -159,6 +179,25 @@ mod tests {
         }
         // the spline passes through its control values
         assert!((s.at(0.01).0 - 2.0).abs() < 1e-12 && (s.at(0.03).0 - 5.0).abs() < 1e-12);
+    }
+
+    /// A spline whose first value is nine times its next (a triangle-model fit of a long toe,
+    /// `z0001-analytic`'s weft) lets the stress fall between them; the curve the same data
+    /// would give without the toe's noise, rising from near zero, does not.
+    #[test]
+    fn a_stress_that_falls_with_strain_is_found() {
+        let weft = vec![601214.8, 68085.6, 49938.4, 80154.9, 109795.6];
+        let s = Stiffness::spline(0.0, 0.062, weft).unwrap();
+        assert!(!s.stress_rises());
+        // σ at 0.5 % strain above σ at 1.55 %
+        assert!(s.density(0.005).1 > s.density(0.0155).1);
+        let warp = vec![4456.6, 40473.8, 212980.5, 362248.4, 445661.0];
+        assert!(Stiffness::spline(0.0, 0.062, warp).unwrap().stress_rises());
+        assert!(Stiffness::constant(5.0).stress_rises());
+        assert!(!Stiffness::constant(0.0).stress_rises());
+        // a softening that keeps σ rising passes
+        let soft = Stiffness::spline(0.0, 0.1, vec![100.0, 80.0, 60.0]).unwrap();
+        assert!(soft.stress_rises());
     }
 
     #[test]
