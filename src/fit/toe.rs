@@ -26,9 +26,19 @@
 //! * the points below s (the last one left out: it may lie on the knee's creep) show no trend:
 //!   their slope is within 4 standard errors of zero, at the same noise variance;
 //! * the knee is sharp: the rise's slope just after s is at least 0.66 of its mean slope over
-//!   the rest of the window. A convex onset that is the material's own (a stiffening law whose
-//!   first forces are lost in the noise) rises from a slope near zero, fails this test and
-//!   keeps its zero.
+//!   the rest of the window, or a level and a rise from zero slope (a smooth onset, placed
+//!   where it fits best) leaves a residual sum of squares larger by the same 25 noise
+//!   variances. A convex onset that is the material's own (a stiffening law whose first
+//!   forces are lost in the noise) rises from a slope near zero, fails both and keeps its
+//!   zero.
+//!
+//! The rule runs on the points up to 5 % of the largest force first, then, where it finds no
+//! slack there, up to 10, 20 and 40 %: over a wide window a law that stiffens tenfold (a warp
+//! whose η has a term of α 245) is no cubic, the cubic's residual hides the knee and its best
+//! knee moves up the rise; the shortest window that holds enough of the rise follows it. On
+//! the lab zoo's first 20 fabrics (curves in N) this finds the slack on 14 curves more of
+//! `z0002-law` (39 of 40), 3 more of `z0018-law`'s and 10 of `z0001-analytic`'s, and changes
+//! no toe found before and none of the bundled or committed curves.
 //!
 //! The level c is allowed so that a constant offset of the load cell does not pass for a
 //! trend; the forces themselves are used as measured. Under noise of 0.2 % of the largest force
@@ -48,6 +58,11 @@ const SLACK_TREND: f64 = 4.0;
 
 /// Least slope just after a flat-stretch knee, as a fraction of the rise's mean slope.
 const KNEE_SLOPE: f64 = 0.66;
+
+/// The flat-stretch rule's windows, tried in turn, each ending at the first point above this
+/// fraction of the largest force (widened as [`window`] widens): a cubic cannot follow a law
+/// that stiffens tenfold within the widest one, and a shorter window sees the knee.
+const SLACK_WINDOWS: [f64; 4] = [0.05, 0.1, 0.2, 0.4];
 
 /// Least-squares residual of a cubic in (e − s)₊ without a constant (points with e ≤ s
 /// predicted as 0).
@@ -101,8 +116,22 @@ fn search(lo: f64, hi: f64, rss: impl Fn(f64) -> f64) -> f64 {
 /// fraction widened from 40 % to 60, 80 and 100 % until 8 points at or above the floor lie in
 /// it; `creep`: with the points under the floor.
 fn window(elongation: &[f64], force: &[f64], fmax: f64, creep: bool) -> Vec<(f64, f64)> {
+    window_from(elongation, force, fmax, creep, 0.4)
+}
+
+/// [`window`] from the fraction `first` of the largest force (widened from there as it is).
+fn window_from(
+    elongation: &[f64],
+    force: &[f64],
+    fmax: f64,
+    creep: bool,
+    first: f64,
+) -> Vec<(f64, f64)> {
     let mut pts: Vec<(f64, f64)> = Vec::new();
-    for frac in [0.4, 0.6, 0.8, 1.0] {
+    for frac in [first, 0.4, 0.6, 0.8, 1.0]
+        .into_iter()
+        .filter(|&f| f >= first)
+    {
         pts = elongation
             .iter()
             .zip(force)
@@ -161,9 +190,17 @@ fn hinge_toe(elongation: &[f64], force: &[f64], fmax: f64) -> f64 {
 /// Least squares of a level c up to s and c plus a cubic in x = (e − s)/scale after it:
 /// the residual sum of squares and (c, the cubic's coefficients of x, x², x³).
 fn flat_hinge(pts: &[(f64, f64)], s: f64, scale: f64) -> (f64, [f64; 4]) {
+    flat_rise(pts, s, scale, 1)
+}
+
+/// Least squares of a level c up to s and c plus x^p, x^(p+1), x^(p+2) after it (x = (e −
+/// s)/scale): p = 1 a knee (a slope at s), p = 2 a smooth onset (none). The residual sum of
+/// squares and the coefficients.
+fn flat_rise(pts: &[(f64, f64)], s: f64, scale: f64, p: i32) -> (f64, [f64; 4]) {
     let row = |e: f64| {
         let x = ((e - s) / scale).max(0.0);
-        nalgebra::Vector4::new(1.0, x, x * x, x * x * x)
+        let xp = x.powi(p);
+        nalgebra::Vector4::new(1.0, xp, xp * x, xp * x * x)
     };
     let mut ata = nalgebra::Matrix4::<f64>::zeros();
     let mut atb = nalgebra::Vector4::<f64>::zeros();
@@ -181,7 +218,17 @@ fn flat_hinge(pts: &[(f64, f64)], s: f64, scale: f64) -> (f64, [f64; 4]) {
 
 /// The flat-stretch rule (module doc): the slack s, or 0.
 fn flat_slack(elongation: &[f64], force: &[f64], fmax: f64) -> f64 {
-    let pts = window(elongation, force, fmax, true);
+    for first in SLACK_WINDOWS {
+        let s = flat_slack_in(&window_from(elongation, force, fmax, true, first), fmax);
+        if s != 0.0 {
+            return s;
+        }
+    }
+    0.0
+}
+
+/// The flat-stretch rule on the points `pts` of one window.
+fn flat_slack_in(pts: &[(f64, f64)], fmax: f64) -> f64 {
     let n = pts.len();
     let steep = pts.iter().filter(|p| p.1 >= TOE_FLOOR * fmax).count();
     if steep < 6 || n < 10 {
@@ -189,9 +236,9 @@ fn flat_slack(elongation: &[f64], force: &[f64], fmax: f64) -> f64 {
     }
     let e_end = pts[n - 1].0;
     // s leaves six points or more on the rise
-    let s = search(0.0, pts[n - 6].0, |s| flat_hinge(&pts, s, e_end).0);
-    let (rss, c) = flat_hinge(&pts, s, e_end);
-    let rss0 = flat_hinge(&pts, 0.0, e_end).0;
+    let s = search(0.0, pts[n - 6].0, |s| flat_hinge(pts, s, e_end).0);
+    let (rss, c) = flat_hinge(pts, s, e_end);
+    let rss0 = flat_hinge(pts, 0.0, e_end).0;
     let below: Vec<(f64, f64)> = pts.iter().copied().filter(|p| p.0 < s).collect();
     if below.len() < SLACK_POINTS || s <= 0.0 {
         return 0.0;
@@ -200,7 +247,11 @@ fn flat_slack(elongation: &[f64], force: &[f64], fmax: f64) -> f64 {
     let significant = rss0 - rss >= SLACK_SIGNIFICANCE * var;
     let x_end = (e_end - s) / e_end;
     let mean_slope = c[1] + c[2] * x_end + c[3] * x_end * x_end;
-    let sharp = c[1] >= KNEE_SLOPE * mean_slope;
+    // a knee: the slope just after s is most of the rise's mean slope, or a level and a rise
+    // from zero slope (a smooth onset, with its own s) fits worse by the significance margin
+    let smooth_s = search(0.0, pts[n - 6].0, |s| flat_rise(pts, s, e_end, 2).0);
+    let smooth_rss = flat_rise(pts, smooth_s, e_end, 2).0;
+    let sharp = c[1] >= KNEE_SLOPE * mean_slope || smooth_rss - rss >= SLACK_SIGNIFICANCE * var;
     if significant && sharp && flat(&below[..below.len() - 1], var) {
         s
     } else {
@@ -260,6 +311,8 @@ mod tests {
         alpha: f64,
         mu2: f64,
         strain: f64,
+        /// more stiffening terms (μ, α), the linear one's μ lowered by theirs
+        more: &'static [(f64, f64)],
     }
 
     impl Law {
@@ -268,8 +321,12 @@ mod tests {
         fn force(&self, e: f64) -> f64 {
             let sigma = |x: f64| {
                 let strain = x / Self::GAUGE;
-                strain
-                    * (1.0 - self.mu2 + self.mu2 * (1.0 + strain * strain).powf(self.alpha - 1.0))
+                let b = 1.0 + strain * strain;
+                let mut eta = 1.0 - self.mu2 + self.mu2 * b.powf(self.alpha - 1.0);
+                for &(mu, alpha) in self.more {
+                    eta += mu * (b.powf(alpha - 1.0) - 1.0);
+                }
+                strain * eta
             };
             50.0 * sigma(e.max(0.0)) / sigma(self.strain * Self::GAUGE)
         }
@@ -286,11 +343,24 @@ mod tests {
             offset: f64,
             seed: u64,
         ) -> (Vec<f64>, Vec<f64>) {
+            self.record_of(120, slack, creep, noise, offset, seed)
+        }
+
+        /// [`Law::record`] with `points` points.
+        fn record_of(
+            &self,
+            points: usize,
+            slack: f64,
+            creep: bool,
+            noise: f64,
+            offset: f64,
+            seed: u64,
+        ) -> (Vec<f64>, Vec<f64>) {
             let mut rng = Noise(seed);
             let travel = self.strain * Self::GAUGE + slack;
             let (mut e, mut f) = (Vec::new(), Vec::new());
-            for i in 1..=120 {
-                let x = travel * i as f64 / 120.0;
+            for i in 1..=points {
+                let x = travel * i as f64 / points as f64;
                 let rise = if x > slack {
                     self.force(x - slack) * (1.0 + 0.25 * noise * rng.normal())
                 } else if creep {
@@ -314,18 +384,30 @@ mod tests {
             alpha: 150.0,
             mu2: 0.4,
             strain: 0.05,
+            more: &[],
         },
         Law {
             alpha: 205.0,
             mu2: 0.34,
             strain: 0.08,
+            more: &[],
         },
         Law {
             alpha: 300.0,
             mu2: 0.9,
             strain: 0.1,
+            more: &[],
         },
     ];
+
+    /// The lab zoo's `z0002-law` warp (degree 4: μ 0.21, 0.12, 0.33 at α 7.3, 109, 245), pulled
+    /// to 11.6 %: its slope rises 10 times from the knee to 40 % of the largest force.
+    const STEEP: Law = Law {
+        alpha: 244.6,
+        mu2: 0.3267,
+        strain: 0.116,
+        more: &[(0.2128, 7.32), (0.1189, 109.3)],
+    };
 
     #[test]
     fn smooth_curves_through_the_origin_keep_their_zero() {
@@ -388,6 +470,42 @@ mod tests {
                         "law {k}, noise {noise}, offset {offset}, seed {seed}"
                     );
                 }
+            }
+        }
+    }
+
+    /// Slack before a law that stiffens tenfold within the first 40 % of its force (the zoo's
+    /// `z0002-law` warp, 453 points a curve: 2 mm missed on all five repeats at 90°, 67.5° and
+    /// 75° by the widest window alone), as a flat stretch of load-cell noise with or without an
+    /// offset, on 450 points: found to 0.15 mm (0.2 % of the gauge; the rise's first 0.1 mm
+    /// stays within the noise). Without slack the curve keeps its zero, or a toe over which
+    /// the law's force stays within [`SLACK_TREND`] noise deviations (the trend the rule lets
+    /// pass as flat).
+    #[test]
+    fn slack_before_a_steeply_stiffening_law_is_found() {
+        for slack in [0.5e-3, 1e-3, 2e-3] {
+            for offset in [0.0, 0.003] {
+                for seed in 1..=3 {
+                    let (e, f) = STEEP.record_of(450, slack, false, 0.002, offset, seed);
+                    let s = detect_toe(&e, &f);
+                    assert!(
+                        (s - slack).abs() < 0.15e-3,
+                        "slack {slack}, offset {offset}, seed {seed}: {s}"
+                    );
+                }
+            }
+        }
+        for (noise, offset) in [(0.0, 0.0), (0.002, 0.0), (0.002, 0.003)] {
+            for seed in 1..=3 {
+                let (e, f) = STEEP.record_of(450, 0.0, false, noise, offset, seed);
+                // where the law's first forces lie within the noise, that stretch may pass for
+                // slack (0.53 mm, 3.2 deviations, on one record in six): never more than it
+                let s = detect_toe(&e, &f);
+                let within_noise = STEEP.force(s) < SLACK_TREND * 50.0 * noise;
+                assert!(
+                    s == 0.0 || (noise > 0.0 && within_noise),
+                    "noise {noise}, offset {offset}, seed {seed}: {s}"
+                );
             }
         }
     }
