@@ -24,7 +24,8 @@
 //! * the knee at s lowers the residual sum of squares by at least 25 times the noise variance
 //!   (the residual's mean square with the knee): far beyond what noise gives an extra parameter;
 //! * the points below s (the last one left out: it may lie on the knee's creep) show no trend:
-//!   their slope is within 4 standard errors of zero, at the same noise variance;
+//!   their slope is within 4 standard errors of zero, at their own noise variance (at the
+//!   same one where fewer than 8 points lie there);
 //! * the knee is sharp: the rise's slope just after s is at least 0.66 of its mean slope over
 //!   the rest of the window, or a level and a rise from zero slope (a smooth onset, placed
 //!   where it fits best) leaves a residual sum of squares larger by the same 25 noise
@@ -53,6 +54,10 @@ const SLACK_SIGNIFICANCE: f64 = 25.0;
 
 /// Largest slope, in standard errors, of the points below a flat-stretch knee.
 const SLACK_TREND: f64 = 4.0;
+
+/// Fewest points below a knee whose own residual variance measures their noise (six degrees
+/// of freedom); fewer are tested at the window's variance.
+const OWN_NOISE_POINTS: usize = 8;
 
 /// Least slope just after a flat-stretch knee, as a fraction of the rise's mean slope.
 const KNEE_SLOPE: f64 = 0.66;
@@ -258,7 +263,11 @@ fn flat_slack_in(pts: &[(f64, f64)], fmax: f64) -> f64 {
 }
 
 /// Whether points show no trend: their least-squares slope within [`SLACK_TREND`] standard
-/// errors of zero at noise variance `var` (fewer than two points: true).
+/// errors of zero (fewer than two points: true). The standard error is at the points' own
+/// noise (their residual variance about their line) where [`OWN_NOISE_POINTS`] or more lie
+/// there, else at `var`: the window's variance mixes the rise's point noise, which grows with
+/// the force, into the load cell's (`z0002-law`'s a75-2.csv: its slack's slope is 2.7 of its
+/// own standard errors and more than 4 at the window's variance).
 fn flat(pts: &[(f64, f64)], var: f64) -> bool {
     if pts.len() < 2 {
         return true;
@@ -272,6 +281,15 @@ fn flat(pts: &[(f64, f64)], var: f64) -> bool {
         return true;
     }
     let slope = sxy / sxx;
+    let var = if pts.len() >= OWN_NOISE_POINTS {
+        let r: f64 = pts
+            .iter()
+            .map(|p| (p.1 - f_mean - slope * (p.0 - e_mean)).powi(2))
+            .sum();
+        r / (m - 2.0)
+    } else {
+        var
+    };
     slope * slope * sxx <= SLACK_TREND * SLACK_TREND * var
 }
 
