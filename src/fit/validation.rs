@@ -194,6 +194,9 @@ pub(super) fn outcomes(
         tests.push(curve_outcome(bench, m, c, last, coarse.as_deref(), order)?);
     }
     interpolation_note(bench, m);
+    for note in super::verdict::outlier_repeats(&tests) {
+        bench.journal.note(note);
+    }
     bend_outcomes(bench, m, last, &mut tests)?;
     Ok(tests)
 }

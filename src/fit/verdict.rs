@@ -60,6 +60,45 @@ pub(crate) fn repeat_error(scaled: f64, scales: &[f64]) -> f64 {
     scaled.max(outside)
 }
 
+/// A fitted repeat whose force scale lies more than this factor from every other repeat's at
+/// its angle is no scatter of one fabric (the bundled canvas's repeats span 0.76–1.22) but a
+/// curve with slack or a preload left in, another strip width or another force unit.
+pub const REPEAT_OUTLIER_FACTOR: f64 = 2.0;
+
+/// Warnings naming each fitted repeat whose force scale lies more than
+/// [`REPEAT_OUTLIER_FACTOR`] from every other fitted repeat's at its angle (two others or
+/// more). Such a curve pulls the stages that fit it (`z0002-law` of the lab zoo: one 75° curve
+/// with 2 mm of slack left in, scale 0.19 against 0.89–1.13, and its 45° strips ended 49 %
+/// outside their band).
+pub(crate) fn outlier_repeats(tests: &[TestOutcome]) -> Vec<String> {
+    let fitted =
+        |t: &&TestOutcome| t.used_in_fit && t.kind == "tensile" && t.repeat_scale.is_some();
+    let mut notes = Vec::new();
+    for (i, t) in tests.iter().enumerate() {
+        let Some(s) = t.repeat_scale.filter(|_| fitted(&t)) else {
+            continue;
+        };
+        let others: Vec<f64> = tests
+            .iter()
+            .enumerate()
+            .filter(|(j, o)| *j != i && fitted(o) && (o.angle_deg - t.angle_deg).abs() < 1e-9)
+            .filter_map(|(_, o)| o.repeat_scale)
+            .collect();
+        let far = |o: &f64| (s / o).max(o / s) > REPEAT_OUTLIER_FACTOR;
+        if others.len() >= 2 && others.iter().all(far) {
+            let lo = others.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = others.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            notes.push(format!(
+                "warning: tensile {}° {}: its force scale {s:.3} lies more than {REPEAT_OUTLIER_FACTOR} times from each of its other {} repeats' ({lo:.3}–{hi:.3}): no scatter of one fabric; check its toe (slack, preload), strip width and force unit",
+                t.angle_deg,
+                t.curve.as_deref().unwrap_or("-"),
+                others.len()
+            ));
+        }
+    }
+    notes
+}
+
 /// A bend's judged error: |drape angle − measured| / measured.
 pub(crate) fn drape_error(angle: f64, measured: f64) -> f64 {
     (angle - measured).abs() / measured
@@ -240,6 +279,30 @@ mod tests {
             joint: false,
             test_meshes: crate::fit::TestMeshes::Own,
         }
+    }
+
+    #[test]
+    fn a_repeat_far_from_every_other_is_named() {
+        // z0002-law's 75° repeats with one curve's slack left in; the canvas's 22.5° scatter
+        let tests = vec![
+            strip(75.0, 0.02, 1.017, 0.02),
+            strip(75.0, 2.74, 0.191, 0.43),
+            strip(75.0, 0.11, 1.122, 0.04),
+            strip(75.0, 0.10, 1.105, 0.05),
+            strip(75.0, 0.13, 0.887, 0.02),
+            strip(22.5, 0.063, 1.066, 0.018),
+            strip(22.5, 0.204, 0.830, 0.017),
+            strip(22.5, 0.320, 0.758, 0.016),
+        ];
+        let notes = outlier_repeats(&tests);
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].contains("75° a75-0.191.csv") && notes[0].contains("0.887–1.122"));
+        // two repeats that disagree by a factor 3 cannot tell which one is off
+        assert!(outlier_repeats(&tests[..2]).is_empty());
+        // a repeat left out of the fit is not named, nor counted
+        let mut left_out = tests.clone();
+        left_out[1].used_in_fit = false;
+        assert!(outlier_repeats(&left_out).is_empty());
     }
 
     #[test]
