@@ -164,7 +164,7 @@ impl TriRun<'_> {
                     100.0 * now,
                     100.0 * whole
                 ));
-                notes.push(format!("a repeated pass over the stages was undone: it left the fitted lab tests worse off as a whole (rms {:.2} % against {:.2} %)", 100.0 * now, 100.0 * whole));
+                notes.push(format!("a repeated pass over the stages was undone: it left the fitted lab tests worse off as a whole ({})", rms_against(now, whole)));
                 *material = before;
                 break;
             }
@@ -213,8 +213,33 @@ impl TriRun<'_> {
         ));
         let now = self.cost_of(material, &sets.lab);
         if now.is_nan() || now >= whole {
-            notes.push(format!("fitting warp and weft bending together was undone: it left the fitted lab tests worse off as a whole (rms {:.2} % against {:.2} %)", 100.0 * now, 100.0 * whole));
+            notes.push(format!("fitting warp and weft bending together was undone: it left the fitted lab tests worse off as a whole ({})", rms_against(now, whole)));
             *material = before;
         }
+    }
+}
+
+/// A trial's rms error against the kept one's, for a note; a trial at which a fitted test does
+/// not solve (rms not a number) says so.
+fn rms_against(trial: f64, kept: f64) -> String {
+    if trial.is_finite() {
+        format!("rms {:.2} % against {:.2} %", 100.0 * trial, 100.0 * kept)
+    } else {
+        format!(
+            "a fitted test does not solve there; rms {:.2} % kept",
+            100.0 * kept
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rms_against;
+
+    #[test]
+    fn a_trial_that_does_not_solve_is_said_in_words() {
+        assert_eq!(rms_against(0.2, 0.1), "rms 20.00 % against 10.00 %");
+        let s = rms_against(f64::NAN, 1.1456);
+        assert!(s.contains("does not solve") && !s.contains("NaN"), "{s}");
     }
 }
