@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 
 #[path = "zoo/best_law.rs"]
 mod best_law;
+#[path = "zoo/failures.rs"]
+mod failures;
 
 /// The triangle models a zoo fabric is also fitted with, every `--models-every` fabrics.
 const TRI_MODELS: [&str; 4] = ["springs", "soft-constraints", "stvk-ds", "xpbd"];
@@ -179,6 +181,7 @@ struct Fit {
     passed: bool,
     wall: f64,
     error: String,
+    verdict: String,
     has_material: bool,
 }
 
@@ -207,12 +210,13 @@ fn read_fits(dir: &Path) -> Result<Vec<Fit>, String> {
     let mut rd = csv::Reader::from_path(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     let head = rd.headers().map_err(|e| e.to_string())?.clone();
     let col = |name: &str| head.iter().position(|h| h == name).unwrap_or(usize::MAX);
-    let (c_fab, c_st, c_pass, c_wall, c_err) = (
+    let (c_fab, c_st, c_pass, c_wall, c_err, c_verdict) = (
         col("fabric"),
         col("status"),
         col("passed"),
         col("wall_seconds"),
         col("error"),
+        col("verdict"),
     );
     let mut fits = Vec::new();
     for row in rd.records() {
@@ -234,6 +238,7 @@ fn read_fits(dir: &Path) -> Result<Vec<Fit>, String> {
             passed: get(c_pass) == "true",
             wall: get(c_wall).parse().unwrap_or(f64::NAN),
             error: get(c_err),
+            verdict: get(c_verdict),
             fabric,
         });
     }
@@ -323,6 +328,12 @@ fn summary(dir: &Path) -> Result<String, String> {
     if !analytic.is_empty() {
         s += &best_law::table(dir, &analytic);
     }
+    let failed: Vec<(String, String, String)> = run
+        .iter()
+        .filter(|f| f.has_material && !f.passed)
+        .map(|f| (f.fabric.clone(), f.model.clone(), f.verdict.clone()))
+        .collect();
+    s += &failures::section(&dir.join("fits"), &failed);
     s += &unbuilt(dir);
     s += "\n## Fits that ended without a material\n\n";
     for f in run.iter().filter(|f| !f.has_material) {
