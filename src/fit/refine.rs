@@ -414,7 +414,22 @@ fn double_and_refit(
 
 #[cfg(test)]
 mod tests {
-    use super::{curve_mesh_error, mesh_tolerance};
+    use super::{curve_mesh_error, fitted_over, mesh_tolerance};
+
+    #[test]
+    fn a_yarn_stage_with_the_joint_sweep_is_fitted_over_the_off_axis_strips_too() {
+        // strips: 0 warp, 1 weft, 2 and 3 off-axis; the weft's stiffness is known (no sweep)
+        let own = vec![vec![0], vec![1], vec![2, 3]];
+        let sets = crate::fit::StageSets {
+            own: own.clone(),
+            joint: Some(vec![vec![0, 2, 3], vec![]]),
+        };
+        assert_eq!(fitted_over(&sets, 0), &[0, 2, 3]);
+        assert_eq!(fitted_over(&sets, 1), &[1]);
+        assert_eq!(fitted_over(&sets, 2), &[2, 3]);
+        let alone = crate::fit::StageSets { own, joint: None };
+        assert_eq!(fitted_over(&alone, 0), &[0]);
+    }
 
     #[test]
     fn the_tolerance_is_a_third_of_the_fit_error_and_at_least_the_floor() {
