@@ -63,13 +63,26 @@ pub fn section(fits_dir: &Path, rows: &[(String, String, String)]) -> String {
         );
         let log =
             std::fs::read_to_string(fits_dir.join(fabric).join("log.txt")).unwrap_or_default();
-        let mut seen: Vec<&str> = Vec::new();
+        // a note repeated on every mesh with other numbers is said once, with its count
+        let mut seen: Vec<(String, &str, usize)> = Vec::new();
         for line in log.lines().filter(|l| !l.starts_with("ks-fit:")) {
             let line = line.trim_start_matches("note: ");
-            if EXPLAINING.iter().any(|p| line.contains(p)) && !seen.contains(&line) {
-                seen.push(line);
-                let _ = writeln!(s, "  * {line}");
+            if !EXPLAINING.iter().any(|p| line.contains(p)) {
+                continue;
             }
+            let shape: String = line.chars().filter(|c| !c.is_ascii_digit()).collect();
+            match seen.iter_mut().find(|n| n.0 == shape) {
+                Some(n) => n.2 += 1,
+                None => seen.push((shape, line, 1)),
+            }
+        }
+        for (_, line, count) in seen {
+            let times = if count > 1 {
+                format!(" ({count} times, the first shown)")
+            } else {
+                String::new()
+            };
+            let _ = writeln!(s, "  * {line}{times}");
         }
     }
     s
