@@ -56,11 +56,11 @@ pub fn fit(
     let last = *meshes.last().expect("one level at least");
     let shapes_fitted = shapes_then_bends(&mut f, &strips, last)?;
     let own_meshes = opts.test_meshes != TestMeshes::Ladder;
-    if own_meshes && refine::refine_tests(&mut f, &maps, &sets, last)? {
+    if own_meshes && refine::refine_tests(&mut f, &maps, &mut sets, last)? {
         // the ladder's solved check is of the meshes ahead of the per-test refinement
         f.evidence.ladder_check = None;
     }
-    let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &sets, last)?;
+    let (uncertainty, mesh_check) = checked_meshes(&mut f, &maps, &mut sets, last)?;
     let t0 = Instant::now();
     let (mut bench, fitted) = f.bench();
     let tests = validation::outcomes(&mut bench, fitted, last)?;
@@ -343,7 +343,7 @@ fn unsolved_bends(f: &mut Fitter, e: &FitError) {
 fn checked_meshes(
     f: &mut Fitter,
     maps: &[StageMap],
-    sets: &StageSets,
+    sets: &mut StageSets,
     last: (usize, usize),
 ) -> Result<(Vec<uncertainty::ParamError>, Option<MeshCheck>), FitError> {
     let opts = f.ctx.opts;

@@ -213,7 +213,7 @@ fn may_refine(f: &Fitter, s: usize, last: (usize, usize)) -> bool {
 pub(super) fn refine_tests(
     f: &mut Fitter,
     maps: &[StageMap],
-    sets: &super::StageSets,
+    sets: &mut super::StageSets,
     last: (usize, usize),
 ) -> Result<bool, FitError> {
     let mut any = false;
@@ -252,7 +252,7 @@ pub(super) fn refine_tests(
 pub(super) fn refine_for_check(
     f: &mut Fitter,
     maps: &[StageMap],
-    sets: &super::StageSets,
+    sets: &mut super::StageSets,
     last: (usize, usize),
     check: &MeshCheck,
     curves: bool,
@@ -360,7 +360,7 @@ fn refine_bends(f: &mut Fitter, last: (usize, usize), bend_moved: f64, angle_mov
 fn double_and_refit(
     f: &mut Fitter,
     maps: &[StageMap],
-    sets: &super::StageSets,
+    sets: &mut super::StageSets,
     last: (usize, usize),
     todo: &[(usize, String)],
     checks: &[StripCheck],
@@ -378,7 +378,7 @@ fn double_and_refit(
         f.journal.note(note);
         f.lab.meshes.strips[*s] += 1;
     }
-    let stages = &sets.own;
+    let stages = sets.own.clone();
     let refined = |set: &[usize]| set.iter().any(|s| todo.iter().any(|t| t.0 == *s));
     let first = (0..stages.len())
         .find(|&k| refined(&stages[k]))
